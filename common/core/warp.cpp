@@ -1,0 +1,60 @@
+#include "core/warp.h"
+
+namespace pf::warp {
+
+Vec3 squareToUniformSphere(const Vec2 &u) {
+    const double z = 1.0 - 2.0 * u.y;
+    const double r = safeSqrt(1.0 - z * z);
+    const double phi = 2.0 * kPi * u.x;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec3 squareToUniformHemisphere(const Vec2 &u) {
+    const double z = u.y;
+    const double r = safeSqrt(1.0 - z * z);
+    const double phi = 2.0 * kPi * u.x;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec3 squareToCosineHemisphere(const Vec2 &u) {
+    const Vec2 p = squareToUniformDiskConcentric(u);
+    return {p.x, p.y, safeSqrt(1.0 - p.x * p.x - p.y * p.y)};
+}
+
+Vec3 squareToUniformCone(const Vec2 &u, double cosCutoff) {
+    const double cosTheta = (1.0 - u.y) + u.y * cosCutoff;
+    const double sinTheta = safeSqrt(1.0 - cosTheta * cosTheta);
+    const double phi = 2.0 * kPi * u.x;
+    return {std::cos(phi) * sinTheta, std::sin(phi) * sinTheta, cosTheta};
+}
+
+double squareToUniformConePdf(const Vec3 &v, double cosCutoff) {
+    return v.z >= cosCutoff ? 1.0 / (2.0 * kPi * (1.0 - cosCutoff)) : 0.0;
+}
+
+Vec2 squareToUniformDiskConcentric(const Vec2 &u) {
+    const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
+    if (a == 0 && b == 0) return {0, 0};
+    double r, phi;
+    if (a * a > b * b) {
+        r = a;
+        phi = (kPi / 4.0) * (b / a);
+    } else {
+        r = b;
+        phi = (kPi / 2.0) - (kPi / 4.0) * (a / b);
+    }
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+Vec2 squareToUniformTriangle(const Vec2 &u) {
+    const double t = safeSqrt(1.0 - u.x);
+    return {1.0 - t, t * u.y};
+}
+
+Vec2 squareToStdNormal(const Vec2 &u) {
+    const double r = std::sqrt(-2.0 * std::log(std::max(1.0 - u.x, 1e-300)));
+    const double phi = 2.0 * kPi * u.y;
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+}  // namespace pf::warp

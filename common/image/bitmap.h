@@ -1,0 +1,42 @@
+// A float RGB(A) image in memory: what films develop into, what EXR/PNG read and write, and what
+// bitmap textures and environment maps load.
+#pragma once
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/spectrum.h"
+
+namespace pf {
+
+struct Bitmap {
+    int width = 0, height = 0;
+    std::vector<float> rgb;  // row-major, 3 floats per pixel, linear
+    std::map<std::string, std::string> metadata;
+
+    Bitmap() = default;
+    Bitmap(int w, int h) : width(w), height(h), rgb(static_cast<size_t>(w) * h * 3, 0.0f) {}
+    Spectrum get(int x, int y) const {
+        const size_t i = (static_cast<size_t>(y) * width + x) * 3;
+        return {rgb[i], rgb[i + 1], rgb[i + 2]};
+    }
+    void set(int x, int y, const Spectrum &s) {
+        const size_t i = (static_cast<size_t>(y) * width + x) * 3;
+        rgb[i] = static_cast<float>(s.r);
+        rgb[i + 1] = static_cast<float>(s.g);
+        rgb[i + 2] = static_cast<float>(s.b);
+    }
+};
+
+// Image I/O. Readers throw SceneError naming the file on any failure (missing, corrupt, unsupported).
+// EXR via OpenEXR (half or float channels R, G, B [, A]); PNG/JPEG via stb_image, with the sRGB
+// transfer function removed when `srgb` is true.
+Bitmap readEXR(const std::string &path);
+void writeEXR(const std::string &path, const Bitmap &img);  // float RGB; metadata as string attributes
+Bitmap readLDR(const std::string &path, bool srgb);
+// Tonemaps linear RGB to 8-bit sRGB (exposure in stops, then clamp) and writes a PNG.
+void writePNG(const std::string &path, const Bitmap &img, double exposure = 0.0);
+// Dispatch on extension (.exr -> readEXR; otherwise readLDR).
+Bitmap readImage(const std::string &path, bool srgbForLDR);
+
+}  // namespace pf

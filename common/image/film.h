@@ -1,0 +1,77 @@
+// Film: resolution, crop window and reconstruction filter (Mitsuba's hdrfilm/ldrfilm), plus the
+// ImageBlock that accumulates filtered samples. Rendering writes into per-tile ImageBlocks that are
+// merged in a fixed order, so images are bit-identical whatever the thread count.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/spectrum.h"
+#include "image/bitmap.h"
+#include "image/rfilter.h"
+#include "scene/object.h"
+
+namespace pf {
+
+class ImageBlock {
+public:
+    // A block covering raster pixels [offsetX, offsetX+w) x [offsetY, offsetY+h) of a film of size
+    // (filmW, filmH), with a border of the filter's radius so that samples near the edge are kept.
+    ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter);
+    // Filtered sample: adds filter(x) * value and filter(x) weight to nearby pixels.
+    void put(const Vec2 &raster, const Spectrum &value);
+    // Unfiltered splat into the pixel containing `raster` (light tracing, MLT); kept separate so that it
+    // is not divided by the filter weights.
+    void splat(const Vec2 &raster, const Spectrum &value);
+    // Adds another block (which must lie inside this one's region incl. border) into this one.
+    void merge(const ImageBlock &other);
+    void clear();
+
+    int offsetX() const { return ox_; }
+    int offsetY() const { return oy_; }
+    int width() const { return w_; }
+    int height() const { return h_; }
+    int border() const { return border_; }
+    // Accessors over the block's storage including the border; (x, y) in raster coordinates.
+    Spectrum weightedSum(int x, int y) const;
+    double weight(int x, int y) const;
+    Spectrum splatSum(int x, int y) const;
+
+private:
+    size_t index(int x, int y) const;
+    int ox_, oy_, w_, h_, border_;
+    const ReconstructionFilter *filter_;
+    std::vector<double> sum_;     // 3 per pixel
+    std::vector<double> weight_;  // 1 per pixel
+    std::vector<double> splat_;   // 3 per pixel
+};
+
+class Film : public Object {
+public:
+    int width() const { return width_; }    // full film size
+    int height() const { return height_; }
+    // The crop window (Mitsuba's cropOffsetX/Y, cropWidth/Height); rendering covers only this region.
+    int cropX() const { return cropX_; }
+    int cropY() const { return cropY_; }
+    int cropWidth() const { return cropW_; }
+    int cropHeight() const { return cropH_; }
+    const ReconstructionFilter &filter() const { return *filter_; }
+    bool isHDR() const { return hdr_; }  // hdrfilm vs ldrfilm
+    double exposure() const { return exposure_; }
+
+    // Develops a block that covers the crop window into an image: weighted sum / weight plus
+    // splatScale * splat sum, per pixel.
+    Bitmap develop(const ImageBlock &block, double splatScale) const;
+
+    static std::shared_ptr<Film> create(int width, int height, std::shared_ptr<ReconstructionFilter> filter);
+
+protected:
+    int width_ = 768, height_ = 576;
+    int cropX_ = 0, cropY_ = 0, cropW_ = 768, cropH_ = 576;
+    std::shared_ptr<ReconstructionFilter> filter_;
+    bool hdr_ = true;
+    double exposure_ = 0.0;
+    friend class FilmFactory;
+};
+
+}  // namespace pf

@@ -1,0 +1,89 @@
+// The scene: shapes in an Embree BVH, emitters, the sensor, and the integrator/sampler settings read
+// from the file. Ray queries count themselves (rays/s figures).
+#pragma once
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/distribution.h"
+#include "emitter/emitter.h"
+#include "scene/intersection.h"
+#include "scene/properties.h"
+#include "scene/shape.h"
+#include "sensor/sensor.h"
+
+namespace pf {
+
+class Scene : public Object {
+public:
+    Scene();
+    ~Scene() override;
+    Scene(const Scene &) = delete;
+    Scene &operator=(const Scene &) = delete;
+
+    void addShape(std::shared_ptr<Shape> shape);
+    void addEmitter(std::shared_ptr<Emitter> emitter);  // non-shape emitters (point, envmap, ...)
+    void setSensor(std::shared_ptr<Sensor> sensor) { sensor_ = std::move(sensor); }
+    void setIntegratorProperties(Properties p) { integratorProps_ = std::move(p); }
+    // Builds the BVH, configures emitters/sensor and the emitter-selection distribution.
+    // Throws SceneError if there is no sensor.
+    void finalize();
+
+    // Closest hit; fills its (with its.wi set from -ray.d). Returns false on a miss.
+    bool intersect(const Ray &ray, Intersection &its) const;
+    // Any hit in (ray.tmin, ray.tmax).
+    bool occluded(const Ray &ray) const;
+    // Ray leaving its in world direction d, offset along the geometric normal to avoid self-hits.
+    Ray spawnRay(const Intersection &its, const Vec3 &d) const;
+    // Shadow ray from its to point p (tmax stops just short of p).
+    Ray spawnRayTo(const Intersection &its, const Vec3 &p) const;
+    Ray spawnRayTo(const Vec3 &from, const Vec3 &p) const;
+    // Robust offset length at point p (relative to the coordinates' magnitude).
+    double epsilonAt(const Vec3 &p) const;
+
+    // Emitter selection (proportional to samplingWeight) and direct sampling from ds.ref:
+    // returns radiance / (selection pmf * pdf), ds.pdf includes the selection pmf. No visibility test.
+    Spectrum sampleEmitterDirect(DirectSample &ds, const Vec2 &u) const;
+    // Density (including the selection pmf) of sampleEmitterDirect producing ds for `emitter`.
+    double pdfEmitterDirect(const DirectSample &ds, const Emitter *emitter) const;
+    // Emitter selection for light tracing; returns the emitter and its selection pmf.
+    const Emitter *sampleEmitter(double u, double &pmf) const;
+    double emitterPmf(const Emitter *e) const;
+
+    const std::vector<std::shared_ptr<Shape>> &shapes() const { return shapes_; }
+    const std::vector<std::shared_ptr<Emitter>> &emitters() const { return emitters_; }
+    const Emitter *environment() const { return environment_; }
+    const Sensor &sensor() const { return *sensor_; }
+    const std::shared_ptr<Sensor> &sensorPtr() const { return sensor_; }
+    const Properties &integratorProperties() const { return integratorProps_; }
+    const AABB &bounds() const { return bounds_; }
+    // Bounding sphere of the scene (environment emitters sample positions on its disk).
+    Vec3 boundingSphereCenter() const { return bounds_.center(); }
+    double boundingSphereRadius() const { return bounds_.extents().length() * 0.5; }
+
+    // Rays traced (intersect + occluded) by the calling thread so far. Thread-local, so counting costs
+    // nothing on the hot path; render loops read it before and after their work.
+    static uint64_t threadRayCount();
+    size_t primitiveCount() const;
+
+private:
+    RTCDevice device_ = nullptr;
+    RTCScene rtc_ = nullptr;
+    std::vector<std::shared_ptr<Shape>> shapes_;
+    std::vector<const Shape *> geomToShape_;
+    std::vector<std::shared_ptr<Emitter>> emitters_;  // all emitters, incl. area emitters of shapes
+    const Emitter *environment_ = nullptr;
+    std::shared_ptr<Sensor> sensor_;
+    Properties integratorProps_;
+    Distribution1D emitterDist_;
+    AABB bounds_;
+};
+
+// Loads a Mitsuba 0.5/0.6 XML scene. `defines` supplies values for $name parameters (CLI -D), overriding
+// <default> elements. Throws SceneError with file and line on any problem.
+std::unique_ptr<Scene> loadScene(const std::string &path,
+                                 const std::vector<std::pair<std::string, std::string>> &defines = {});
+
+}  // namespace pf
