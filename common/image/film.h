@@ -2,11 +2,13 @@
 // ImageBlock that accumulates filtered samples. Rendering writes into per-tile ImageBlocks that are
 // merged in a fixed order, so images are bit-identical whatever the thread count.
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/spectrum.h"
+#include "core/vector.h"
 #include "image/bitmap.h"
 #include "image/rfilter.h"
 #include "scene/object.h"
@@ -26,6 +28,9 @@ public:
     // Adds another block (which must lie inside this one's region incl. border) into this one.
     void merge(const ImageBlock &other);
     void clear();
+    // Samples put() or splat() dropped because their value or position was NaN or infinite (Mitsuba
+    // warns about these too); merge() adds the counts, so a render can report them.
+    uint64_t invalidSamples() const { return invalid_; }
 
     int offsetX() const { return ox_; }
     int offsetY() const { return oy_; }
@@ -44,6 +49,7 @@ private:
     std::vector<double> sum_;     // 3 per pixel
     std::vector<double> weight_;  // 1 per pixel
     std::vector<double> splat_;   // 3 per pixel
+    uint64_t invalid_ = 0;
 };
 
 class Film : public Object {
@@ -58,11 +64,31 @@ public:
     const ReconstructionFilter &filter() const { return *filter_; }
     bool isHDR() const { return hdr_; }  // hdrfilm vs ldrfilm
     double exposure() const { return exposure_; }
+    // ldrfilm's transfer curve: -1 = sRGB (Mitsuba's default), otherwise a pure power 1/gamma.
+    double gamma() const { return gamma_; }
+    // Output format the scene asked for: "openexr", "rgbe" or "pfm" (hdrfilm), "png" or "jpeg" (ldrfilm).
+    const std::string &fileFormat() const { return fileFormat_; }
+    // Mitsuba's highQualityEdges: also sample raster positions up to the filter border outside the crop
+    // window, so that edge pixels receive their full filter footprint.
+    bool highQualityEdges() const { return highQualityEdges_; }
+
+    // Limits on the film size: absurd resolutions are rejected before anything is allocated.
+    static constexpr int kMaxSide = 32768;
+    static constexpr int64_t kMaxPixels = int64_t(1) << 28;
+
+    // Changes the resolution and resets the crop window to the whole film (benchmarks, previews).
+    void resize(int width, int height) {
+        width_ = cropW_ = width;
+        height_ = cropH_ = height;
+        cropX_ = cropY_ = 0;
+    }
 
     // Develops a block that covers the crop window into an image: weighted sum / weight plus
     // splatScale * splat sum, per pixel.
     Bitmap develop(const ImageBlock &block, double splatScale) const;
 
+    // An hdrfilm without crop; a null filter means Mitsuba's default (gaussian, stddev 0.5). Throws
+    // SceneError for a size outside [1, kMaxSide] per side or above kMaxPixels in total.
     static std::shared_ptr<Film> create(int width, int height, std::shared_ptr<ReconstructionFilter> filter);
 
 protected:
@@ -71,7 +97,9 @@ protected:
     std::shared_ptr<ReconstructionFilter> filter_;
     bool hdr_ = true;
     double exposure_ = 0.0;
-    friend class FilmFactory;
+    double gamma_ = -1.0;
+    std::string fileFormat_ = "openexr";
+    bool highQualityEdges_ = false;
 };
 
 }  // namespace pf

@@ -35,6 +35,14 @@ public:
     // Throws SceneError if the name is already set (Mitsuba rejects duplicate parameters).
     void set(const std::string &name, Type type, Value value, const SourceLocation &loc);
     bool has(const std::string &name) const { return values_.count(name) != 0; }
+    // Raw value of a parameter (throws if absent), for copying parameters between plugin descriptions.
+    const Value &value(const std::string &name) const {
+        const auto it = values_.find(name);
+        if (it == values_.end()) fail(name, "missing parameter");
+        return it->second.value;
+    }
+    // Drops a parameter (so that a command-line override can replace it with set()).
+    void remove(const std::string &name) { values_.erase(name); }
     // Type of a parameter; throws if absent.
     Type type(const std::string &name) const;
     // Location of a parameter (falls back to the plugin's location).

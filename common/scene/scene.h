@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/distribution.h"
+#include "image/film.h"
 #include "emitter/emitter.h"
 #include "scene/intersection.h"
 #include "scene/properties.h"
@@ -26,6 +27,12 @@ public:
     void addShape(std::shared_ptr<Shape> shape);
     void addEmitter(std::shared_ptr<Emitter> emitter);  // non-shape emitters (point, envmap, ...)
     void setSensor(std::shared_ptr<Sensor> sensor) { sensor_ = std::move(sensor); }
+    // Changes the film resolution (crop reset to the full film) and lets the sensor recompute its
+    // raster mapping. Used by benchmarks and previews.
+    void resizeFilm(int width, int height) {
+        sensor_->film().resize(width, height);
+        sensor_->configure(*this);
+    }
     void setIntegratorProperties(Properties p) { integratorProps_ = std::move(p); }
     // Builds the BVH, configures emitters/sensor and the emitter-selection distribution.
     // Throws SceneError if there is no sensor.
@@ -66,6 +73,8 @@ public:
     // Rays traced (intersect + occluded) by the calling thread so far. Thread-local, so counting costs
     // nothing on the hot path; render loops read it before and after their work.
     static uint64_t threadRayCount();
+    // The Embree scene, for benchmarks that measure raw traversal throughput.
+    RTCScene embreeScene() const { return rtc_; }
     size_t primitiveCount() const;
 
 private:

@@ -41,9 +41,18 @@ public:
     virtual bool rasterPosition(const Vec3 &p, const Vec3 &d, Vec2 &raster) const = 0;
     // True when the aperture is a point (pinhole): paths cannot hit the lens (no t = 0 strategy).
     virtual bool deltaAperture() const = 0;
+    // Finite apertures (the t = 0 strategy): where a ray arriving from the scene crosses the aperture
+    // within (ray.tmin, ray.tmax); fills ps (p, n, uv = raster position, pdf, Measure::Area) and t. The
+    // importance there is evalPosition(ps) * evalDirection(-ray.d). False for a pinhole.
+    virtual bool intersectAperture(const Ray &ray, PositionSample &ps, double &t) const {
+        (void)ray, (void)ps, (void)t;
+        return false;
+    }
 
     virtual void configure(const Scene &scene) { (void)scene; }
     const Transform &toWorld() const { return toWorld_; }
+    // Medium the sensor sits in (Mitsuba: a medium child of <sensor>), nullptr for vacuum.
+    const class Medium *medium() const { return medium_.get(); }
     Film &film() const { return *film_; }
     const std::shared_ptr<Film> &filmPtr() const { return film_; }
     // Samples per pixel requested by the scene's <sampler> (Mitsuba's sampleCount, default 4).
@@ -54,6 +63,7 @@ public:
 protected:
     Transform toWorld_;
     std::shared_ptr<Film> film_;
+    std::shared_ptr<class Medium> medium_;
     int sampleCount_ = 4;
     double nearClip_ = 1e-2, farClip_ = 1e4;
 };

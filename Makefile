@@ -1,0 +1,39 @@
+# pathfarm: the two commands of the README, and the targets they are made of.
+#   make demo   install what is missing, build, render a bundled scene, write EXR + PNG into out/
+#   make test   install what is missing, build, run the test suite (what CI runs)
+BUILD ?= build
+JOBS ?= $(shell nproc)
+CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
+
+.PHONY: all deps build demo test test-sanitize bench format clean
+
+all: build
+
+deps:
+	./scripts/install-deps.sh
+
+build: deps
+	cmake -S . -B $(BUILD) -G Ninja $(CMAKE_FLAGS)
+	ninja -C $(BUILD) -j$(JOBS)
+
+demo: build
+	mkdir -p out
+	./$(BUILD)/pathfarm render scenes/cornell-box/scene.xml --integrator path --spp 32 -o out/cornell-box.exr
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 600
+
+# Bad-input corpus and loader tests under AddressSanitizer + UndefinedBehaviorSanitizer.
+test-sanitize: deps
+	cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=Debug -DPATHFARM_SANITIZE=ON
+	ninja -C build-sanitize -j$(JOBS) pathfarm test_bad_input test_loader
+	cd build-sanitize && ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -R 'BadInput|Loader' --timeout 900
+
+bench: build
+	./$(BUILD)/bench_pathtracer scenes/cornell-box/scene.xml scenes/veach-bidir/scene.xml
+
+format:
+	clang-format -i $$(git ls-files '*.cpp' '*.h')
+
+clean:
+	rm -rf $(BUILD) build-sanitize out

@@ -1,0 +1,37 @@
+#include <functional>
+#include <map>
+
+#include "integrators/integrator.h"
+#include "integrators/path.h"
+
+namespace pf {
+
+namespace {
+
+using Factory = std::function<std::unique_ptr<Integrator>(const Properties &)>;
+
+const std::map<std::string, Factory> &factories() {
+    static const std::map<std::string, Factory> table = {
+        {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p); }},
+    };
+    return table;
+}
+
+}  // namespace
+
+std::string integratorNames() {
+    std::string names;
+    for (const auto &[name, f] : factories()) names += (names.empty() ? "" : ", ") + name;
+    return names;
+}
+
+std::unique_ptr<Integrator> createIntegrator(const std::string &type, const Properties &props, bool strict) {
+    const auto it = factories().find(type);
+    if (it == factories().end())
+        throw SceneError(props.location(), "unknown integrator '" + type + "' (available: " + integratorNames() + ")");
+    auto integrator = it->second(props);
+    if (strict) props.checkAllUsed();
+    return integrator;
+}
+
+}  // namespace pf

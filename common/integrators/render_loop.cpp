@@ -1,0 +1,80 @@
+// The embedded render loop shared by every SamplingIntegrator: a sequence of ImageTasks (the same
+// tasks the farm distributes), merged in order, under a sample count or a wall-time budget.
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "image/film.h"
+#include "integrators/integrator.h"
+#include "render/image_task.h"
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+class ProgressBar {
+public:
+    explicit ProgressBar(bool enabled) : enabled_(enabled) {}
+    void update(double fraction, const char *label) {
+        if (!enabled_) return;
+        const int width = 40, filled = static_cast<int>(clamp(fraction, 0.0, 1.0) * width);
+        std::fprintf(stderr, "\r[%.*s%*s] %5.1f%% %s", filled, "########################################",
+                     width - filled, "", 100.0 * clamp(fraction, 0.0, 1.0), label);
+        std::fflush(stderr);
+    }
+    ~ProgressBar() {
+        if (enabled_) std::fprintf(stderr, "\n");
+    }
+
+private:
+    bool enabled_;
+};
+
+}  // namespace
+
+Spectrum SamplingIntegrator::sample(const Scene &scene, Sampler &sampler, const Vec2 &raster, SplatList &) const {
+    const Sensor &sensor = scene.sensor();
+    const Vec2 aperture = sensor.deltaAperture() ? Vec2(0.5, 0.5) : sampler.next2D();
+    Ray ray;
+    const Spectrum weight = sensor.sampleRay(ray, raster, aperture);
+    return weight.isBlack() ? Spectrum() : weight * Li(scene, sampler, ray);
+}
+
+Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
+    using Clock = std::chrono::steady_clock;
+    const Film &film = scene.sensor().film();
+    const int threads =
+        opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const bool timed = opt.timeLimit > 0;
+    const int64_t targetSpp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
+
+    ImageBlock image = makeFilmBlock(scene);
+    ProgressBar progress(opt.progress);
+    const auto start = Clock::now();
+    int64_t done = 0;
+    double lastTaskSeconds = 0;
+    for (;;) {
+        const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+        // Under a time budget the clock decides whether another whole task starts, never when one stops.
+        if (timed ? (done > 0 && elapsed + lastTaskSeconds > opt.timeLimit) : done >= targetSpp) break;
+        const ImageTask task{done, timed ? 1 : imageTaskSize(targetSpp, done)};
+        const ImageTaskResult r = runImageTask(scene, *this, opt.seed, task, threads);
+        image.merge(r.block);
+        done += task.sampleCount;
+        stats.rays += r.rays;
+        lastTaskSeconds = r.seconds;
+
+        const double total = std::chrono::duration<double>(Clock::now() - start).count();
+        char label[64];
+        std::snprintf(label, sizeof label, "%lld spp, %.1f s", static_cast<long long>(done), total);
+        progress.update(timed ? total / opt.timeLimit : static_cast<double>(done) / targetSpp, label);
+        if (opt.onPass) opt.onPass(done, film.develop(image, 1.0 / static_cast<double>(done)));
+    }
+    stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    stats.samplesPerPixel = done;
+    stats.samples = static_cast<uint64_t>(done) * film.cropWidth() * film.cropHeight();
+    return film.develop(image, done > 0 ? 1.0 / static_cast<double>(done) : 0.0);
+}
+
+}  // namespace pf

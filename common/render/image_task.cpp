@@ -1,0 +1,91 @@
+#include "render/image_task.h"
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+constexpr int kTileSize = 32;
+// Samples per pixel in one task: small enough for a responsive progress bar, live preview and
+// fine-grained farm scheduling, large enough that per-task tile allocation and merging are negligible.
+constexpr int64_t kMaxSamplesPerTask = 8;
+
+struct Tile {
+    int x, y, w, h;
+};
+
+std::vector<Tile> makeTiles(int width, int height) {
+    std::vector<Tile> tiles;
+    for (int y = 0; y < height; y += kTileSize)
+        for (int x = 0; x < width; x += kTileSize)
+            tiles.push_back({x, y, std::min(kTileSize, width - x), std::min(kTileSize, height - y)});
+    return tiles;
+}
+
+}  // namespace
+
+ImageBlock makeFilmBlock(const Scene &scene) {
+    const Film &film = scene.sensor().film();
+    return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
+}
+
+int64_t imageTaskSize(int64_t spp, int64_t firstSample) { return std::min(kMaxSamplesPerTask, spp - firstSample); }
+
+ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
+                             const ImageTask &task, int threads) {
+    const auto start = std::chrono::steady_clock::now();
+    const Film &film = scene.sensor().film();
+    const std::vector<Tile> tiles = makeTiles(film.cropWidth(), film.cropHeight());
+    const ReconstructionFilter *filter = &film.filter();
+
+    std::vector<ImageBlock> blocks;
+    blocks.reserve(tiles.size());
+    for (const Tile &t : tiles) blocks.emplace_back(t.x, t.y, t.w, t.h, filter);
+    std::vector<SplatList> splats(tiles.size());
+    std::atomic<size_t> next{0};
+    std::atomic<uint64_t> rays{0};
+    auto worker = [&]() {
+        const uint64_t rays0 = Scene::threadRayCount();
+        Sampler sampler;
+        for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
+            const Tile &t = tiles[i];
+            for (int y = t.y; y < t.y + t.h; ++y)
+                for (int x = t.x; x < t.x + t.w; ++x) {
+                    const uint64_t pixel =
+                        static_cast<uint64_t>(film.cropY() + y) * film.width() + film.cropX() + x;
+                    for (int64_t s = task.firstSample; s < task.firstSample + task.sampleCount; ++s) {
+                        sampler.start(seed, pixel, static_cast<uint64_t>(s));
+                        const Vec2 raster = Vec2(x, y) + sampler.next2D();
+                        Spectrum L = integrator.sample(scene, sampler, raster, splats[i]);
+                        // A NaN or infinite sample would poison a whole filter footprint; it signals a
+                        // bug, so it is dropped here rather than hidden in the image.
+                        if (!L.isFinite()) L = Spectrum();
+                        blocks[i].put(raster, L);
+                    }
+                }
+        }
+        rays.fetch_add(Scene::threadRayCount() - rays0);
+    };
+    std::vector<std::thread> pool;
+    for (int k = 1; k < threads; ++k) pool.emplace_back(worker);
+    worker();
+    for (auto &th : pool) th.join();
+
+    ImageTaskResult result{makeFilmBlock(scene)};
+    for (const ImageBlock &b : blocks) result.block.merge(b);
+    for (const SplatList &list : splats)
+        for (const Splat &sp : list)
+            if (sp.value.isFinite()) result.block.splat(sp.raster, sp.value);
+    result.samples = static_cast<uint64_t>(task.sampleCount) * film.cropWidth() * film.cropHeight();
+    result.rays = rays.load();
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+}  // namespace pf

@@ -1,0 +1,37 @@
+// The seam between renderer and farm for image-space integrators (path, volpath, bdpt): an
+// ImageTask renders samples [firstSample, firstSample + sampleCount) of every pixel of the film's crop
+// window into an unnormalized ImageBlock. It is a pure function of (scene, integrator, seed, task):
+// the embedded renderer and the farm's workers run the same function, and merging task results in
+// task order gives the same bits wherever the tasks ran.
+#pragma once
+#include <cstdint>
+
+#include "image/film.h"
+#include "integrators/integrator.h"
+
+namespace pf {
+
+struct ImageTask {
+    int64_t firstSample = 0;
+    int64_t sampleCount = 1;
+};
+
+struct ImageTaskResult {
+    ImageBlock block;
+    uint64_t samples = 0;  // pixel samples taken
+    uint64_t rays = 0;
+    double seconds = 0;
+};
+
+// Runs the task on `threads` threads. Tiles are rendered in any order but merged in a fixed order.
+ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
+                             const ImageTask &task, int threads);
+
+// An empty block covering the scene's crop window (what tasks are merged into).
+ImageBlock makeFilmBlock(const Scene &scene);
+
+// Splits a budget of `spp` samples per pixel into the fixed task sizes used by both the embedded
+// renderer and the farm (so that their images agree bitwise).
+int64_t imageTaskSize(int64_t spp, int64_t firstSample);
+
+}  // namespace pf
