@@ -18,6 +18,7 @@
 
 namespace pf {
 
+class Properties;
 class Scene;
 class Shape;
 
@@ -62,12 +63,22 @@ public:
     virtual Spectrum evalDirection(const DirectionSample &ds, const PositionSample &ps) const = 0;
     virtual double pdfDirection(const DirectionSample &ds, const PositionSample &ps) const = 0;
 
+    // Environment emitters (constant, envmap) are the inside of a sphere around the scene and the camera
+    // that emits inwards (see emitter/environment.h), so that light tracing and BDPT treat their vertices
+    // with ordinary area densities. For a ray leaving the scene this fills ds.p and ds.n (inward) on that
+    // sphere, ds.d = ray.d, ds.dist = infinity, ds.measure and ds.object, ready for pdfDirect and for the
+    // position/direction densities. Returns false for emitters that an escaping ray cannot reach.
+    virtual bool fillDirectSample(DirectSample &ds, const Ray &ray) const;
+
     // Sampling weight for emitter selection (Mitsuba's samplingWeight, default 1).
     double samplingWeight() const { return samplingWeight_; }
     // Total emitted power (used for display and statistics).
     virtual Spectrum power() const = 0;
 
 protected:
+    // Reads the parameters every emitter accepts (Mitsuba's samplingWeight).
+    void configureCommon(const Properties &props);
+
     uint32_t flags_ = 0;
     double samplingWeight_ = 1.0;
     const Shape *shape_ = nullptr;

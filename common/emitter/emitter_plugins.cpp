@@ -1,0 +1,22 @@
+// The emitter plugins of Mitsuba 0.6 that pathfarm supports. Mitsuba's sun, sky and sunsky are not among
+// them: they need the Hosek-Wilkie sky model and the sun's spectral tables, which pathfarm does not ship.
+#include "scene/plugins.h"
+
+namespace pf {
+
+std::shared_ptr<Object> createAreaEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createPointEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createSpotEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createDirectionalEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createConstantEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createEnvMapEmitter(const Properties &props, const LoadContext &ctx);
+
+PluginTable emitterPlugins() {
+    return {
+        {"area", createAreaEmitter},         {"point", createPointEmitter},
+        {"spot", createSpotEmitter},         {"directional", createDirectionalEmitter},
+        {"constant", createConstantEmitter}, {"envmap", createEnvMapEmitter},
+    };
+}
+
+}  // namespace pf
