@@ -1,6 +1,7 @@
 #include <functional>
 #include <map>
 
+#include "integrators/bdpt.h"
 #include "integrators/integrator.h"
 #include "integrators/path.h"
 
@@ -12,7 +13,9 @@ using Factory = std::function<std::unique_ptr<Integrator>(const Properties &)>;
 
 const std::map<std::string, Factory> &factories() {
     static const std::map<std::string, Factory> table = {
-        {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p); }},
+        {"bdpt", [](const Properties &p) { return std::make_unique<BDPT>(p); }},
+        {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p, false); }},
+        {"volpath", [](const Properties &p) { return std::make_unique<PathTracer>(p, true); }},
     };
     return table;
 }

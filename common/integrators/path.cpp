@@ -1,18 +1,65 @@
-// Unidirectional path tracer with next-event estimation and multiple importance sampling (power
-// heuristic), Russian roulette and Mitsuba 0.6's maxDepth/rrDepth/strictNormals/hideEmitters semantics
-// ([OV §3, Alg. 1], [TH 2.4.1-2.4.2]; ALGORITHMS.md §1.3; MIS: Veach 1997 §9.2).
+// Path tracer (`path`, and with participating media `volpath`) with next-event estimation from surface and medium vertices and multiple
+// importance sampling (power heuristic) against BSDF and phase-function sampling, following Mitsuba
+// 0.6's volpath (MIVolumetricPathTracer) and the path-space view of ALGORITHMS.md §1.1: a medium vertex
+// scatters with sigma_s * phase, and every edge carries the transmittance tau.
 //
-// Depth counts path edges as in Mitsuba: depth 1 sees emitters directly, maxDepth = 2 is direct
-// lighting only, -1 is unbounded. Passing through a Null lobe (index-matched surface) is not a
-// scattering event and does not count.
-#include "bsdf/bsdf.h"
+// * Free-flight sampling decides, on each segment, between a medium interaction and reaching the next
+//   surface; the throughput is divided by the medium's pdfSuccess or pdfFailure, so chromatic media stay
+//   unbiased (medium/homogeneous.cpp).
+// * Emitters reached by a sampled direction are found by walking the direction through index-matched
+//   surfaces and media with the analytic transmittance (walkTransmittance), exactly as next-event
+//   estimation's shadow rays do, so the two strategies estimate the same paths and the MIS weights are
+//   those of the direction densities. The path itself then continues with free-flight sampling, and
+//   emission it meets later is not counted again.
+// * Depth counts scattering events, surface or medium, as Mitsuba's maxDepth does (1 = directly visible
+//   emitters, 2 = single scattering, -1 = unbounded). Passing through a Null lobe (an index-matched
+//   boundary, the transparent part of a mask or thin dielectric) is not a scattering event; unlike
+//   Mitsuba's volpath, which counts those crossings, this keeps volpath identical to `path` on scenes
+//   without media.
+// * `path` is this estimator with media ignored (Mitsuba's path tracer does not render media): every
+//   segment is vacuum and index-matched boundaries are plain pass-through.
 #include "integrators/path.h"
+
+#include "bsdf/bsdf.h"
 #include "integrators/visibility.h"
+#include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace pf {
 
-PathTracer::PathTracer(const Properties &props) {
+namespace {
+
+// Bound on consecutive pass-through crossings between two scattering events (coincident null surfaces).
+constexpr int kMaxCrossings = 256;
+
+// Radiance arriving at `ref` along the sampled direction ray.d (ray leaves ref in `medium`): each
+// emitter the direction reaches through index-matched surfaces contributes its radiance times the
+// transmittance up to it, and the environment contributes if the direction leaves the scene.
+Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, const Medium *medium, bool trackMedia,
+                       double dirPdf, bool delta) {
+    Spectrum L;
+    const auto visit = [&](const Intersection &its, const Spectrum &T) {
+        if (its.isEmitter()) L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
+    };
+    const Spectrum escaped = walkTransmittance(scene, ray, medium, visit, trackMedia);
+    if (!escaped.isBlack()) L += escaped * misWeightedEmission(scene, ray, Intersection(), ref, dirPdf, delta);
+    return L;
+}
+
+// Next-event estimation's contribution for an emitter sample ds with weight `value` (radiance / pdf):
+// the scattering value f towards ds.d, attenuated along `shadow` (which starts in `medium`), weighted
+// against the scattering density scatterPdf of the same direction.
+Spectrum directLight(const Scene &scene, const DirectSample &ds, const Spectrum &value, const Spectrum &f,
+                     double scatterPdf, const Ray &shadow, const Medium *medium, bool trackMedia) {
+    if (value.isBlack() || f.isBlack()) return {};
+    const Spectrum T = transmittance(scene, shadow, medium, trackMedia);
+    if (T.isBlack()) return {};
+    return value * f * T * (ds.measure == Measure::Discrete ? 1.0 : powerHeuristic(ds.pdf, scatterPdf));
+}
+
+}  // namespace
+
+PathTracer::PathTracer(const Properties &props, bool media) : media_(media) {
     maxDepth_ = static_cast<int>(props.getInt("maxDepth", -1));
     rrDepth_ = static_cast<int>(props.getInt("rrDepth", 5));
     strictNormals_ = props.getBool("strictNormals", false);
@@ -21,95 +68,106 @@ PathTracer::PathTracer(const Properties &props) {
     if (rrDepth_ < 1) props.fail("rrDepth", "must be at least 1");
 }
 
-// Radiance emitted towards the previous vertex by the surface or environment found along `ray`
-// (its invalid = escaped), MIS-weighted against next-event estimation from `ref`.
-Spectrum PathTracer::emitted(const Scene &scene, const Ray &ray, const Intersection &its, const Vec3 &ref,
-                             double bsdfPdf, bool deltaSample) const {
-    const Emitter *emitter = its.isValid() ? its.emitter() : scene.environment();
-    if (!emitter) return {};
-    const Spectrum Le = its.isValid() ? emitter->eval(its, -ray.d) : emitter->evalEnvironment(ray);
-    if (Le.isBlack() || deltaSample) return Le;
-    DirectSample ds(ref, Vec3());
-    ds.d = ray.d;
-    ds.object = emitter;
-    if (its.isValid()) {
-        ds.p = its.p;
-        ds.n = its.n;
-        ds.uv = its.uv;
-        ds.dist = (its.p - ref).length();
-    } else {
-        ds.dist = kInfinity;
-    }
-    const double lightPdf = scene.pdfEmitterDirect(ds, emitter);
-    return Le * powerHeuristic(bsdfPdf, lightPdf);
-}
-
 Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary) const {
     Spectrum L, throughput(1.0);
     Ray ray = primary;
+    // Free-flight segments are measured from the true position of the last vertex or boundary crossing,
+    // not from the spawned ray's offset origin, so that media are not thinned by the ray epsilon at
+    // every boundary.
+    Vec3 origin = primary.o;
+    const Medium *medium = media_ ? scene.sensor().medium() : nullptr;
     Intersection its;
     scene.intersect(ray, its);
-    // Pass through index-matched surfaces in front of the camera.
-    for (int guard = 0; its.isValid() && its.bsdf()->isNull() && guard < 256; ++guard) {
-        ray = scene.spawnRay(its, ray.d);
-        its = Intersection();
-        scene.intersect(ray, its);
-    }
-    if (!hideEmitters_) L += emitted(scene, ray, its, ray.o, 0.0, true);
-
+    const BSDFContext ctx;
     double eta = 1.0;  // accumulated relative IOR, for Russian roulette (Mitsuba's radiance scaling)
-    int depth = 1;
-    // At depth d both next-event estimation and the emitter found by BSDF sampling complete paths of
-    // d + 1 edges, so scattering happens only while d < maxDepth (Mitsuba's MIPathTracer).
-    while (its.isValid() && (maxDepth_ < 0 || depth < maxDepth_)) {
-        const BSDF *bsdf = its.bsdf();
-        // Mitsuba's strictNormals: the geometric and shading normals must agree on the incident side.
-        if (strictNormals_ && dot(ray.d, its.n) * Frame::cosTheta(its.wi) >= 0) break;
+    int depth = 1, crossings = 0;
+    // Before the first scattering event emission is counted where the path meets it; afterwards
+    // emissionAlong has already counted it at the vertex that sampled the direction.
+    bool scattered = false;
 
-        // Next-event estimation.
-        const BSDFContext ctx;
-        if (bsdf->flags() & BSDFFlags::Smooth) {
-            DirectSample ds(its.p, its.n);
+    for (;;) {
+        MediumSample ms;
+        const double segment = its.isValid() ? (its.p - origin).length() : kInfinity;
+        if (medium && medium->sampleDistance(Ray(origin, ray.d, 0, segment), sampler.next1D(), ms)) {
+            // Medium interaction: a scattering event with weight sigma_s * T / pdfSuccess.
+            if (maxDepth_ >= 0 && depth >= maxDepth_) break;
+            throughput *= ms.sigmaS * ms.transmittance / ms.pdfSuccess;
+            const PhaseFunction &phase = medium->phase();
+            const Vec3 wi = -ray.d;
+
+            DirectSample ds(ms.p, Vec3());
             const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
-            if (!value.isBlack()) {
-                const Vec3 wo = its.toLocal(ds.d);
-                const Spectrum f = bsdf->eval(ctx, its, its.wi, wo);
-                const bool geometryOk = !strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0;
-                if (!f.isBlack() && geometryOk) {
-                    const Spectrum T = transmittance(scene, scene.spawnRayTo(its, ds.p));
-                    if (!T.isBlack()) {
-                        const bool delta = ds.measure == Measure::Discrete;
-                        const double bsdfPdf = delta ? 0.0 : bsdf->pdf(ctx, its, its.wi, wo);
-                        L += throughput * value * f * T * (delta ? 1.0 : powerHeuristic(ds.pdf, bsdfPdf));
-                    }
-                }
+            if (!value.isBlack())
+                L += throughput * directLight(scene, ds, value, Spectrum(phase.eval(wi, ds.d)), phase.pdf(wi, ds.d),
+                                              scene.spawnRayTo(ms.p, ds.p), medium, media_);
+
+            Vec3 wo;
+            double phasePdf = 0;
+            const double weight = phase.sample(wi, wo, phasePdf, sampler.next2D());
+            if (!(weight > 0)) break;
+            throughput *= weight;
+            ray = Ray(ms.p, wo);
+            origin = ms.p;
+            L += throughput * emissionAlong(scene, ray, ms.p, medium, media_, phasePdf, false);
+        } else {
+            if (medium) {
+                if (!(ms.pdfFailure > 0)) break;
+                throughput *= ms.transmittance / ms.pdfFailure;
             }
+            if (!scattered && !hideEmitters_) {
+                L += throughput *
+                     (its.isValid() ? its.Le(-ray.d) : misWeightedEmission(scene, ray, its, ray.o, 0.0, true));
+            }
+            if (!its.isValid()) break;
+            const BSDF *bsdf = its.bsdf();
+            // Crossing a Null lobe is not a scattering event, so at the depth limit, and always at an
+            // index-matched boundary, the path may still pass through but not scatter.
+            const bool atLimit = maxDepth_ >= 0 && depth >= maxDepth_;
+            if (atLimit && !(bsdf->flags() & BSDFFlags::Null)) break;
+            const bool passOnly = atLimit || bsdf->isNull();
+            // Mitsuba's strictNormals: the geometric and shading normals must agree on the incident side.
+            if (!passOnly && strictNormals_ && dot(ray.d, its.n) * Frame::cosTheta(its.wi) >= 0) break;
+
+            if (!passOnly && (bsdf->flags() & BSDFFlags::Smooth)) {
+                DirectSample ds(its.p, its.n);
+                const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
+                const Vec3 wo = its.toLocal(ds.d);
+                if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0))
+                    L += throughput * directLight(scene, ds, value, bsdf->eval(ctx, its, its.wi, wo),
+                                                  bsdf->pdf(ctx, its, its.wi, wo), scene.spawnRayTo(its, ds.p),
+                                                  media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_);
+            }
+
+            BSDFSample bs;
+            const double u1 = sampler.next1D();
+            const BSDFContext sampleCtx(TransportMode::Radiance, passOnly ? BSDFFlags::Null : BSDFFlags::All);
+            const Spectrum weight = bsdf->sample(sampleCtx, its, its.wi, bs, u1, sampler.next2D());
+            if (weight.isBlack()) break;
+            const Vec3 wo = its.toWorld(bs.wo);
+            if (!passOnly && strictNormals_ && dot(wo, its.n) * Frame::cosTheta(bs.wo) <= 0) break;
+            throughput *= weight;
+            eta *= bs.eta;
+            if (media_) medium = mediumAfter(its, wo, medium);
+            origin = its.p;
+            ray = scene.spawnRay(its, wo);
+            if (bs.sampledType == BSDFFlags::Null) {
+                // Passing straight through: no scattering event, and the emission beyond was already
+                // counted from the previous vertex (its walks cross Null lobes), or will be counted by
+                // this loop if the path has not scattered yet.
+                if (++crossings > kMaxCrossings) break;
+                its = Intersection();
+                scene.intersect(ray, its);
+                continue;
+            }
+            L += throughput *
+                 emissionAlong(scene, ray, origin, medium, media_, bs.pdf, (bs.sampledType & BSDFFlags::Delta) != 0);
         }
 
-        // BSDF sampling.
-        BSDFSample bs;
-        const double u1 = sampler.next1D();
-        const Spectrum weight = bsdf->sample(ctx, its, its.wi, bs, u1, sampler.next2D());
-        if (weight.isBlack()) break;
-        const Vec3 wo = its.toWorld(bs.wo);
-        if (strictNormals_ && dot(wo, its.n) * Frame::cosTheta(bs.wo) <= 0) break;
-        throughput *= weight;
-        eta *= bs.eta;
-        const bool deltaSample = (bs.sampledType & BSDFFlags::Delta) != 0;
-        const Vec3 ref = its.p;
-
-        // Trace to the next scattering surface, crossing index-matched (Null) surfaces.
-        ray = scene.spawnRay(its, wo);
         its = Intersection();
         scene.intersect(ray, its);
-        for (int guard = 0; its.isValid() && its.bsdf()->isNull() && guard < 256; ++guard) {
-            ray = scene.spawnRay(its, ray.d);
-            its = Intersection();
-            scene.intersect(ray, its);
-        }
-        L += throughput * emitted(scene, ray, its, ref, bs.pdf, deltaSample);
+        scattered = true;
+        crossings = 0;
         ++depth;
-
         // Russian roulette after rrDepth (Mitsuba: survival probability from throughput and eta^2).
         if (depth > rrDepth_) {
             const double q = std::min(throughput.max() * eta * eta, 0.95);

@@ -34,7 +34,8 @@ PluginTable sensorPlugins();    // sensor/sensor_plugins.cpp
 PluginTable filmPlugins();      // image/film_plugins.cpp (hdrfilm, ldrfilm)
 PluginTable rfilterPlugins();   // image/film_plugins.cpp (box, tent, gaussian)
 PluginTable samplerPlugins();   // scene/sampler_settings.cpp (independent, stratified, sobol, ...)
-PluginTable mediumPlugins();    // medium/ (issue 4; empty until then)
+PluginTable mediumPlugins();    // scene/medium_plugins.cpp (homogeneous)
+PluginTable phasePlugins();     // medium/phase_plugins.cpp (isotropic, hg)
 
 // Returns nullptr if no such plugin exists.
 const PluginFactory *findPlugin(ObjectKind kind, const std::string &type);

@@ -1,0 +1,84 @@
+#include "integrators/visibility.h"
+
+#include "bsdf/bsdf.h"
+#include "scene/medium.h"
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+// Bound on the surfaces one walk crosses, so that a degenerate configuration (coincident null
+// surfaces) cannot loop forever.
+constexpr int kMaxCrossings = 256;
+
+// Medium segments run between the points where the walk meets surfaces (not the offset origins of the
+// rays spawned there), so that media are not thinned by the ray epsilon at every crossing.
+Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit) {
+    Spectrum T(1.0);
+    Vec3 start = ray.o;
+    for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
+        Intersection its;
+        const bool hit = scene.intersect(ray, its);
+        if (trackMedia && medium) {
+            const double length = hit ? (its.p - start).length()
+                                      : (std::isfinite(ray.tmax) ? (ray(ray.tmax) - start).length() : kInfinity);
+            T *= medium->evalTransmittance(Ray(start, ray.d, 0, length));
+        }
+        if (!hit || T.isBlack()) return T;
+        if (visit) (*visit)(its, T);
+        T *= nullTransmittance(its);
+        if (T.isBlack()) return T;
+        if (trackMedia) medium = mediumAfter(its, ray.d, medium);
+        start = its.p;
+        ray = std::isfinite(ray.tmax) ? scene.spawnRayTo(its, ray(ray.tmax)) : scene.spawnRay(its, ray.d);
+    }
+    return Spectrum(0.0);
+}
+
+}  // namespace
+
+Spectrum nullTransmittance(const Intersection &its) {
+    const BSDF *bsdf = its.bsdf();
+    if (!bsdf || !(bsdf->flags() & BSDFFlags::Null)) return Spectrum(0.0);
+    const BSDFContext ctx(TransportMode::Radiance, BSDFFlags::Null);
+    return bsdf->eval(ctx, its, its.wi, -its.wi, Measure::Discrete);
+}
+
+Spectrum transmittance(const Scene &scene, Ray ray) { return walk(scene, ray, false, nullptr, nullptr); }
+
+Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, bool trackMedia) {
+    return walk(scene, ray, trackMedia, medium, nullptr);
+}
+
+Spectrum walkTransmittance(const Scene &scene, Ray ray, const Medium *medium, const SurfaceVisitor &visit,
+                           bool trackMedia) {
+    return walk(scene, ray, trackMedia, medium, &visit);
+}
+
+const Medium *mediumAfter(const Intersection &its, const Vec3 &d, const Medium *current) {
+    const Shape *shape = its.shape;
+    return shape->interiorMedium() || shape->exteriorMedium() ? its.targetMedium(d) : current;
+}
+
+Spectrum misWeightedEmission(const Scene &scene, const Ray &ray, const Intersection &its, const Vec3 &ref,
+                             double dirPdf, bool delta) {
+    const Emitter *emitter = its.isValid() ? its.emitter() : scene.environment();
+    if (!emitter) return {};
+    const Spectrum Le = its.isValid() ? emitter->eval(its, -ray.d) : emitter->evalEnvironment(ray);
+    if (Le.isBlack() || delta) return Le;
+    DirectSample ds(ref, Vec3());
+    ds.d = ray.d;
+    ds.object = emitter;
+    if (its.isValid()) {
+        ds.p = its.p;
+        ds.n = its.n;
+        ds.uv = its.uv;
+        ds.dist = (its.p - ref).length();
+    } else {
+        ds.dist = kInfinity;
+    }
+    return Le * powerHeuristic(dirPdf, scene.pdfEmitterDirect(ds, emitter));
+}
+
+}  // namespace pf
