@@ -1,6 +1,7 @@
-// Independent sampler. A sample is identified by (seed, pixel index, sample index); the same triple
-// always yields the same stream, which is what makes renders reproducible across thread counts and
-// lets a worker regenerate a BDPT candidate path exactly (issue: Markov-chain tasks).
+// Samplers hand out the uniform numbers an integrator consumes. Integrators take the abstract Sampler,
+// so the same BDPT code runs on independent streams (path tracing, seeding) and on the mutated
+// primary-sample vectors of PSSMLT/MMLT (Kelemen et al. 2002), which replay and perturb a recorded
+// sequence.
 #pragma once
 #include "core/rng.h"
 #include "core/vector.h"
@@ -9,17 +10,27 @@ namespace pf {
 
 class Sampler {
 public:
-    Sampler() = default;
-    Sampler(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) { start(seed, pixelIndex, sampleIndex); }
-    void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
-        rng_.seed(hashCombine(hashCombine(seed, pixelIndex), sampleIndex), mix64(seed) ^ pixelIndex);
-    }
-    double next1D() { return rng_.nextDouble(); }
+    virtual ~Sampler() = default;
+    virtual double next1D() = 0;
     Vec2 next2D() {
         const double a = next1D();
         return {a, next1D()};
     }
-    PCG32 &rng() { return rng_; }
+};
+
+// Independent uniform numbers. A sample is identified by (seed, pixel index, sample index); the same
+// triple always yields the same stream, which is what makes renders reproducible across thread counts
+// and lets a worker regenerate a BDPT candidate path exactly (ALGORITHMS.md §2.4-2.5).
+class IndependentSampler final : public Sampler {
+public:
+    IndependentSampler() = default;
+    IndependentSampler(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
+        start(seed, pixelIndex, sampleIndex);
+    }
+    void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
+        rng_.seed(hashCombine(hashCombine(seed, pixelIndex), sampleIndex), mix64(seed) ^ pixelIndex);
+    }
+    double next1D() override { return rng_.nextDouble(); }
 
 private:
     PCG32 rng_;
