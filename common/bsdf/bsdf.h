@@ -75,9 +75,9 @@ public:
     // Union of BSDFFlags over all lobes (for the whole surface, not a specific point).
     uint32_t flags() const { return flags_; }
     bool hasDelta() const { return (flags_ & BSDFFlags::Delta) != 0; }
+    // True for surfaces through which light only passes without changing direction (the null BSDF,
+    // which also bounds index-matched media).
     bool isNull() const { return (flags_ & BSDFFlags::All) == BSDFFlags::Null; }
-    // True for surfaces through which light passes without changing direction (null, and the
-    // boundaries of index-matched media).
     // Relative IOR interior/exterior (1 for non-refractive models).
     virtual double eta() const { return 1.0; }
     // Roughness (alpha) of the given lobe at its; 0 for delta lobes, infinity for diffuse.
