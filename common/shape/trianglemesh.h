@@ -1,0 +1,93 @@
+// Triangle meshes (Mitsuba 0.6's TriMesh): the common representation behind obj, ply, serialized,
+// rectangle and cube. Geometry is kept in double precision in world space; Embree gets a float copy
+// and every hit is recomputed in double against the double triangle (fillIntersection).
+//
+// Differential geometry follows pbrt-v3 §3.6.2-3.6.3: with texture coordinates, dp/du and dp/dv are the
+// partials with respect to them; without (or with a degenerate texture mapping) the chart is the
+// barycentric one, uv = (b1, b2), so dp/du = p1 - p0 and dp/dv = p2 - p0. Shading normals interpolate
+// the vertex normals and are differentiated through the normalization; flat triangles have dn = 0.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "core/distribution.h"
+#include "core/transform.h"
+#include "shape/shapegroup.h"
+
+namespace pf {
+
+// A mesh as read from a file, in object space.
+struct MeshData {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;  // empty, or one per vertex
+    std::vector<Vec2> uvs;      // empty, or one per vertex
+    std::vector<std::array<uint32_t, 3>> triangles;
+    bool faceNormals = false;  // the file asks for a faceted look (Mitsuba serialized flag)
+};
+
+// Parameters every Mitsuba mesh plugin accepts.
+struct MeshOptions {
+    Transform toWorld;
+    bool faceNormals = false;     // ignore/do not generate vertex normals (faceted look)
+    bool flipNormals = false;     // turn every normal around
+    double maxSmoothAngle = 0.0;  // degrees; > 0 discards the file's normals and rebuilds them per crease
+    // toWorld, faceNormals and flipNormals (every mesh plugin).
+    static MeshOptions fromProperties(const Properties &props);
+    // The above and maxSmoothAngle (the plugins that read mesh files).
+    static MeshOptions forMeshFile(const Properties &props);
+};
+
+class TriangleMesh final : public Shape, public Instanceable {
+public:
+    // Validates `data` (finite values, indices in range, at least one triangle of non-zero area) and
+    // prepares it as Mitsuba does: transform to world space, drop degenerate triangles, generate
+    // angle-weighted smooth normals unless faceNormals (Thuermer & Wuethrich 1998, as Mitsuba's
+    // TriMesh::computeNormals), rebuild them per crease for maxSmoothAngle, apply flipNormals. Problems
+    // raise SceneError naming `source` (the file, or the plugin). Reads the shape's bsdf/emitter/media
+    // children from `props`.
+    TriangleMesh(const Properties &props, MeshData data, const MeshOptions &opts, const std::string &source);
+
+    unsigned addToEmbree(RTCDevice device, RTCScene scene) const override;
+    void fillIntersection(const Ray &ray, double t, uint32_t primIndex, const Vec2 &embreeUV,
+                          Intersection &its) const override;
+    AABB bbox() const override { return bbox_; }
+    double surfaceArea() const override { return area_; }
+    size_t primitiveCount() const override { return triangles_.size(); }
+    void samplePosition(PositionSample &ps, const Vec2 &u) const override;
+    std::shared_ptr<Shape> transformedCopy(const Transform &toWorld, const Properties &where) const override;
+
+    size_t vertexCount() const { return positions_.size(); }
+    bool hasVertexNormals() const { return !normals_.empty(); }
+    bool hasTexCoords() const { return !uvs_.empty(); }
+    const std::vector<Vec3> &positions() const { return positions_; }
+    const std::vector<Vec3> &normals() const { return normals_; }
+    const std::vector<std::array<uint32_t, 3>> &triangles() const { return triangles_; }
+
+private:
+    // Validates, transforms and cleans up `data` as described at the constructor.
+    void build(MeshData data, const MeshOptions &opts, const std::string &source);
+    // Applies a transform to positions and normals (and the winding, for mirroring transforms).
+    void transformInPlace(const Transform &toWorld);
+    // Replaces the normals by per-crease smooth normals (maxSmoothAngle).
+    void rebuildCreases(double maxAngleDeg);
+    // Recomputes the area distribution, total area and bounding box.
+    void updateSamplingData();
+    // Surface point of triangle `prim` at barycentrics (b1, b2): position, normals, uv and partials.
+    void fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const;
+
+    std::vector<Vec3> positions_, normals_;
+    std::vector<Vec2> uvs_;
+    std::vector<std::array<uint32_t, 3>> triangles_;
+    Distribution1D areaDist_;
+    AABB bbox_;
+    double area_ = 0;
+};
+
+// Reads the mesh file formats into MeshData; each throws SceneError naming `path` (and the line for
+// text formats) for a missing, truncated or malformed file.
+MeshData readOBJ(const std::string &path, bool flipTexCoords);
+MeshData readPLY(const std::string &path);
+MeshData readSerialized(const std::string &path, int64_t shapeIndex);
+
+}  // namespace pf
