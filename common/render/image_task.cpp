@@ -52,7 +52,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     std::atomic<uint64_t> rays{0};
     auto worker = [&]() {
         const uint64_t rays0 = Scene::threadRayCount();
-        Sampler sampler;
+        IndependentSampler sampler;
         for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
             const Tile &t = tiles[i];
             for (int y = t.y; y < t.y + t.h; ++y)
