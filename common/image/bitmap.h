@@ -28,15 +28,17 @@ struct Bitmap {
     }
 };
 
-// Image I/O. Readers throw SceneError naming the file on any failure (missing, corrupt, unsupported).
-// EXR via OpenEXR (half or float channels R, G, B [, A]); PNG/JPEG via stb_image, with the sRGB
-// transfer function removed when `srgb` is true.
+// Image I/O. Readers throw SceneError naming the file on any failure (missing, corrupt, truncated,
+// unsupported). EXR via OpenEXR (half, float or uint channels R, G, B, or a luminance channel Y); PNG
+// (8 or 16 bit) and JPEG via stb_image, with the sRGB transfer function removed when `srgb` is true.
+// Alpha channels are not loaded.
 Bitmap readEXR(const std::string &path);
 void writeEXR(const std::string &path, const Bitmap &img);  // float RGB; metadata as string attributes
 Bitmap readLDR(const std::string &path, bool srgb);
-// Tonemaps linear RGB to 8-bit sRGB (exposure in stops, then clamp) and writes a PNG.
-void writePNG(const std::string &path, const Bitmap &img, double exposure = 0.0);
-// Dispatch on extension (.exr -> readEXR; otherwise readLDR).
+// Tonemaps linear RGB to 8-bit sRGB (exposure in stops, then clamp) and writes a PNG. gamma = -1 is the
+// sRGB curve; any other positive value a pure power 1/gamma (ldrfilm's `gamma`).
+void writePNG(const std::string &path, const Bitmap &img, double exposure = 0.0, double gamma = -1.0);
+// Dispatch on extension or content (.exr or the EXR magic number -> readEXR; otherwise readLDR).
 Bitmap readImage(const std::string &path, bool srgbForLDR);
 
 }  // namespace pf

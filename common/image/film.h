@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,15 @@ public:
     Spectrum weightedSum(int x, int y) const;
     double weight(int x, int y) const;
     Spectrum splatSum(int x, int y) const;
+    // The raw storage including the border, row-major: 3 weighted sums, 1 weight and 3 splat sums per
+    // pixel. The farm ships blocks between processes through these, bit for bit.
+    std::span<const double> sumData() const { return sum_; }
+    std::span<const double> weightData() const { return weight_; }
+    std::span<const double> splatData() const { return splat_; }
+    std::span<double> sumData() { return sum_; }
+    std::span<double> weightData() { return weight_; }
+    std::span<double> splatData() { return splat_; }
+    void setInvalidSamples(uint64_t n) { invalid_ = n; }
 
 private:
     size_t index(int x, int y) const;
@@ -54,7 +64,7 @@ private:
 
 class Film : public Object {
 public:
-    int width() const { return width_; }    // full film size
+    int width() const { return width_; }  // full film size
     int height() const { return height_; }
     // The crop window (Mitsuba's cropOffsetX/Y, cropWidth/Height); rendering covers only this region.
     int cropX() const { return cropX_; }

@@ -9,6 +9,18 @@
 
 namespace pf {
 
+class Properties;
+
+// Mitsuba's Texture2D lookup transform, shared by the uv-mapped textures: the surface's (u, v) become
+// (u * uscale + uoffset, v * vscale + voffset) before the lookup.
+struct UVMapping {
+    Vec2 offset{0, 0}, scale{1, 1};
+    UVMapping() = default;
+    // Reads uoffset, voffset, uscale and vscale (defaults 0, 0, 1, 1).
+    explicit UVMapping(const Properties &props);
+    Vec2 apply(const Vec2 &uv) const { return {uv.x * scale.x + offset.x, uv.y * scale.y + offset.y}; }
+};
+
 class Texture : public Object {
 public:
     virtual Spectrum eval(const Intersection &its) const = 0;

@@ -1,0 +1,169 @@
+// ImageBlock accumulation and film development (Mitsuba's ImageBlock::put and Film::develop; pbrt-v3
+// §7.9 "Film and the imaging pipeline" for the weighted-average reconstruction).
+//
+// Reconstruction is the weighted average I(p) = sum_i f(x_i - p) L_i / sum_i f(x_i - p) over the samples
+// x_i near pixel centre p = (i + 0.5, j + 0.5) (pbrt-v3 eq. 7.12). Splats from light tracing and
+// Metropolis methods are estimates of the pixel integral itself, so they bypass the division and are
+// scaled by the caller's normalisation instead.
+#include "image/film.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace pf {
+
+namespace {
+
+// Taps per axis of the widest accepted filter: pixels with |i + 0.5 - x| <= radius.
+constexpr int kMaxTaps = 2 * static_cast<int>(kMaxFilterRadius) + 2;
+
+}  // namespace
+
+ImageBlock::ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter)
+    : ox_(offsetX), oy_(offsetY), w_(w), h_(h), border_(filter ? filter->borderSize() : 0), filter_(filter) {
+    if (w < 0 || h < 0) throw std::invalid_argument("ImageBlock: negative size");
+    if (filter && !(filter->radius() > 0 && filter->radius() <= kMaxFilterRadius))
+        throw std::invalid_argument("ImageBlock: filter radius outside (0, kMaxFilterRadius]");
+    const size_t pixels = static_cast<size_t>(w + 2 * border_) * static_cast<size_t>(h + 2 * border_);
+    sum_.assign(3 * pixels, 0.0);
+    weight_.assign(pixels, 0.0);
+    splat_.assign(3 * pixels, 0.0);
+}
+
+size_t ImageBlock::index(int x, int y) const {
+    const int sx = x - (ox_ - border_), sy = y - (oy_ - border_);
+    if (sx < 0 || sy < 0 || sx >= w_ + 2 * border_ || sy >= h_ + 2 * border_)
+        throw std::out_of_range("ImageBlock: pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                ") outside the block");
+    return static_cast<size_t>(sy) * static_cast<size_t>(w_ + 2 * border_) + static_cast<size_t>(sx);
+}
+
+void ImageBlock::put(const Vec2 &raster, const Spectrum &value) {
+    if (!value.isFinite() || !std::isfinite(raster.x) || !std::isfinite(raster.y)) {
+        ++invalid_;
+        return;
+    }
+    if (!filter_) {
+        // Without a filter a sample counts, with weight one, for the pixel that contains it.
+        const double x = std::floor(raster.x), y = std::floor(raster.y);
+        if (x < ox_ || y < oy_ || x >= static_cast<double>(ox_) + w_ || y >= static_cast<double>(oy_) + h_) return;
+        const size_t i = index(static_cast<int>(x), static_cast<int>(y));
+        sum_[3 * i] += value.r;
+        sum_[3 * i + 1] += value.g;
+        sum_[3 * i + 2] += value.b;
+        weight_[i] += 1.0;
+        return;
+    }
+    // Work relative to pixel centres; the storage spans pixels [lo, hi] per axis.
+    const double r = filter_->radius();
+    const double px = raster.x - 0.5, py = raster.y - 0.5;
+    const int loX = ox_ - border_, hiX = ox_ + w_ + border_ - 1;
+    const int loY = oy_ - border_, hiY = oy_ + h_ + border_ - 1;
+    // Reject far-away samples in floating point first, so that the int conversions below cannot overflow.
+    if (px + r < loX || px - r > hiX || py + r < loY || py - r > hiY) return;
+    const int x0 = std::max(loX, static_cast<int>(std::ceil(px - r)));
+    const int x1 = std::min(hiX, static_cast<int>(std::floor(px + r)));
+    const int y0 = std::max(loY, static_cast<int>(std::ceil(py - r)));
+    const int y1 = std::min(hiY, static_cast<int>(std::floor(py + r)));
+    if (x0 > x1 || y0 > y1) return;
+
+    double wx[kMaxTaps], wy[kMaxTaps];
+    for (int x = x0; x <= x1; ++x) wx[x - x0] = filter_->eval(x - px);
+    for (int y = y0; y <= y1; ++y) wy[y - y0] = filter_->eval(y - py);
+    for (int y = y0; y <= y1; ++y) {
+        size_t i = index(x0, y);
+        for (int x = x0; x <= x1; ++x, ++i) {
+            const double w = wx[x - x0] * wy[y - y0];
+            sum_[3 * i] += w * value.r;
+            sum_[3 * i + 1] += w * value.g;
+            sum_[3 * i + 2] += w * value.b;
+            weight_[i] += w;
+        }
+    }
+}
+
+void ImageBlock::splat(const Vec2 &raster, const Spectrum &value) {
+    if (!value.isFinite() || !std::isfinite(raster.x) || !std::isfinite(raster.y)) {
+        ++invalid_;
+        return;
+    }
+    const double x = std::floor(raster.x), y = std::floor(raster.y);
+    // Splats outside the storage belong to pixels this block does not hold.
+    if (x < ox_ - border_ || y < oy_ - border_ || x >= static_cast<double>(ox_) + w_ + border_ ||
+        y >= static_cast<double>(oy_) + h_ + border_)
+        return;
+    const size_t i = index(static_cast<int>(x), static_cast<int>(y));
+    splat_[3 * i] += value.r;
+    splat_[3 * i + 1] += value.g;
+    splat_[3 * i + 2] += value.b;
+}
+
+// Element-wise addition, row by row over contiguous storage: for the same blocks merged in the same
+// order the result is the same bits, which is what makes renders independent of the thread count.
+void ImageBlock::merge(const ImageBlock &other) {
+    const int oLoX = other.ox_ - other.border_, oLoY = other.oy_ - other.border_;
+    const int oW = other.w_ + 2 * other.border_, oH = other.h_ + 2 * other.border_;
+    if (oLoX < ox_ - border_ || oLoY < oy_ - border_ || oLoX + oW > ox_ + w_ + border_ ||
+        oLoY + oH > oy_ + h_ + border_)
+        throw std::invalid_argument("ImageBlock::merge: the other block (with its border) does not fit");
+    invalid_ += other.invalid_;
+    if (oW == 0 || oH == 0) return;
+    for (int row = 0; row < oH; ++row) {
+        const size_t src = static_cast<size_t>(row) * static_cast<size_t>(oW);
+        const size_t dst = index(oLoX, oLoY + row);
+        for (size_t k = 0; k < static_cast<size_t>(oW); ++k) weight_[dst + k] += other.weight_[src + k];
+        for (size_t k = 0; k < 3 * static_cast<size_t>(oW); ++k) {
+            sum_[3 * dst + k] += other.sum_[3 * src + k];
+            splat_[3 * dst + k] += other.splat_[3 * src + k];
+        }
+    }
+}
+
+void ImageBlock::clear() {
+    std::fill(sum_.begin(), sum_.end(), 0.0);
+    std::fill(weight_.begin(), weight_.end(), 0.0);
+    std::fill(splat_.begin(), splat_.end(), 0.0);
+    invalid_ = 0;
+}
+
+Spectrum ImageBlock::weightedSum(int x, int y) const {
+    const size_t i = index(x, y);
+    return {sum_[3 * i], sum_[3 * i + 1], sum_[3 * i + 2]};
+}
+
+double ImageBlock::weight(int x, int y) const { return weight_[index(x, y)]; }
+
+Spectrum ImageBlock::splatSum(int x, int y) const {
+    const size_t i = index(x, y);
+    return {splat_[3 * i], splat_[3 * i + 1], splat_[3 * i + 2]};
+}
+
+Bitmap Film::develop(const ImageBlock &block, double splatScale) const {
+    if (block.offsetX() > 0 || block.offsetY() > 0 || block.offsetX() + block.width() < cropW_ ||
+        block.offsetY() + block.height() < cropH_)
+        throw std::invalid_argument("Film::develop: the block does not cover the crop window");
+    Bitmap img(cropW_, cropH_);
+    for (int y = 0; y < cropH_; ++y)
+        for (int x = 0; x < cropW_; ++x) {
+            // A pixel no sample reached (weight zero) has no estimate from put(); it shows only splats.
+            const double w = block.weight(x, y);
+            const Spectrum filtered = w != 0 ? block.weightedSum(x, y) / w : Spectrum(0.0);
+            img.set(x, y, filtered + block.splatSum(x, y) * splatScale);
+        }
+    return img;
+}
+
+std::shared_ptr<Film> Film::create(int width, int height, std::shared_ptr<ReconstructionFilter> filter) {
+    if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide ||
+        static_cast<int64_t>(width) * height > kMaxPixels)
+        throw SceneError("film size " + std::to_string(width) + "x" + std::to_string(height) + " is outside 1.." +
+                         std::to_string(kMaxSide) + " per side or above " + std::to_string(kMaxPixels) + " pixels");
+    auto film = std::make_shared<Film>();
+    film->width_ = film->cropW_ = width;
+    film->height_ = film->cropH_ = height;
+    film->filter_ = filter ? std::move(filter) : std::make_shared<GaussianFilter>();
+    return film;
+}
+
+}  // namespace pf
