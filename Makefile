@@ -23,11 +23,14 @@ demo: build
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 600
 
-# Bad-input corpus and loader tests under AddressSanitizer + UndefinedBehaviorSanitizer.
+# The bad-input corpus (loader and CLI), the loader, shape and mesh-reader tests under
+# AddressSanitizer + UndefinedBehaviorSanitizer.
+SANITIZE_TESTS = test_bad_input test_loader test_shapes test_scene
 test-sanitize: deps
 	cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=Debug -DPATHFARM_SANITIZE=ON
-	ninja -C build-sanitize -j$(JOBS) pathfarm test_bad_input test_loader
-	cd build-sanitize && ASAN_OPTIONS=detect_leaks=0 ctest --output-on-failure -R 'BadInput|Loader' --timeout 900
+	ninja -C build-sanitize -j$(JOBS) pathfarm $(SANITIZE_TESTS)
+	cd build-sanitize && for t in $(SANITIZE_TESTS); do \
+	  PATHFARM_CLI=$$PWD/pathfarm ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 ./$$t || exit 1; done
 
 bench: build
 	./$(BUILD)/bench_pathtracer scenes/cornell-box/scene.xml scenes/veach-bidir/scene.xml

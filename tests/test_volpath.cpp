@@ -81,6 +81,26 @@ TEST(VolPath, BeerLambertThroughIndexMatchedBoundaries) {
 // A scattering, chromatic medium with maxDepth = 1: medium interactions are scattering events, so only
 // the light that crosses unscattered is counted, Le exp(-sigma_t (R2 - R1)), now estimated through
 // free-flight sampling (crossing weight T / pdfFailure).
+// The camera itself inside a medium (an unnamed medium child of <sensor>): an absorbing medium filling
+// everything inside the emitting sphere attenuates its radiance by exp(-sigma_a * 10).
+TEST(VolPath, CameraInsideAMedium) {
+    const Spectrum sigmaA(0.05, 0.1, 0.2);
+    const std::string xml = R"(<scene version="0.6.0"><integrator type="volpath"/>
+        <medium type="homogeneous" id="fog"><rgb name="sigmaS" value="0, 0, 0"/><rgb name="sigmaA" value=")" +
+                            rgb(sigmaA) + R"("/></medium>
+        <sensor type="perspective"><float name="fov" value="50"/><ref id="fog"/>
+          <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/>
+            <rfilter type="box"/></film></sensor>
+        <shape type="sphere"><float name="radius" value="10"/><boolean name="flipNormals" value="true"/>
+          <ref name="interior" id="fog"/><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+          <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape></scene>)";
+    const RenderOutput out = renderXml(xml, "volpath", 2, 1, 2);
+    for (int c = 0; c < 3; ++c) {
+        const MeanCI m = regionMean(out.image, 0, 0, out.image.width, out.image.height, c);
+        EXPECT_NEAR(m.mean, std::exp(-sigmaA[c] * 10), 1e-6) << "channel " << c;
+    }
+}
+
 TEST(VolPath, MaxDepthOneSeesOnlyUnscatteredLight) {
     const MediumSpec m{Spectrum(0.5, 0.2, 1.5), Spectrum(0.1, 0.4, 0.2)};
     const RenderOutput out = renderXml(shellScene(m, 1), "volpath", 32, 2, 2);

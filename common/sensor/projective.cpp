@@ -7,6 +7,7 @@
 #include "core/warp.h"
 #include "emitter/endpoint.h"
 #include "image/film.h"
+#include "scene/medium.h"
 #include "scene/sampler_settings.h"
 
 namespace pf {
@@ -58,6 +59,14 @@ ProjectiveCamera::ProjectiveCamera(const Properties &props, const LoadContext &c
     toWorld_ = rigidTransform(props, "toWorld");
     worldToLocal_ = toWorld_.inverse();
     forward_ = normalize(toWorld_.vector(Vec3(0, 0, 1)));
+
+    // A camera inside a participating medium (Mitsuba: an unnamed medium child or ref of <sensor>).
+    const auto media = props.children(ObjectKind::Medium);
+    if (media.size() > 1) props.fail("a sensor sits in at most one medium");
+    if (!media.empty()) {
+        medium_ = std::dynamic_pointer_cast<Medium>(media.front());
+        if (!medium_) props.fail("the nested medium is not a medium");
+    }
 
     nearClip_ = props.getFloat("nearClip", 1e-2);
     farClip_ = props.getFloat("farClip", 1e4);
