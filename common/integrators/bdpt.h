@@ -19,9 +19,9 @@ namespace pf {
 // One strategy's share of a pixel sample.
 struct StrategySample {
     int s = 0, t = 0;
-    Vec2 raster;        // where it lands on the film
-    double weight = 0;  // its MIS weight
-    Spectrum value;     // weight * f / p
+    Vec2 raster;                       // where it lands on the film
+    double weight = 0;                 // its MIS weight
+    Spectrum value;                    // weight * f / p
     const JoinedPath *path = nullptr;  // the path, valid during the visit
 };
 using StrategyVisitor = std::function<void(const StrategySample &)>;

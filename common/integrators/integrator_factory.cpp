@@ -2,8 +2,12 @@
 #include <map>
 
 #include "integrators/bdpt.h"
+#include "integrators/erpt.h"
 #include "integrators/integrator.h"
+#include "integrators/mlt.h"
+#include "integrators/mmlt.h"
 #include "integrators/path.h"
+#include "integrators/pssmlt.h"
 
 namespace pf {
 
@@ -14,7 +18,11 @@ using Factory = std::function<std::unique_ptr<Integrator>(const Properties &)>;
 const std::map<std::string, Factory> &factories() {
     static const std::map<std::string, Factory> table = {
         {"bdpt", [](const Properties &p) { return std::make_unique<BDPT>(p); }},
+        {"erpt", [](const Properties &p) { return std::make_unique<ERPT>(p); }},
+        {"mlt", [](const Properties &p) { return std::make_unique<MLT>(p); }},
+        {"mmlt", [](const Properties &p) { return std::make_unique<MMLT>(p); }},
         {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p, false); }},
+        {"pssmlt", [](const Properties &p) { return std::make_unique<PSSMLT>(p); }},
         {"volpath", [](const Properties &p) { return std::make_unique<PathTracer>(p, true); }},
     };
     return table;

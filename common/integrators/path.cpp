@@ -1,6 +1,6 @@
-// Path tracer (`path`, and with participating media `volpath`) with next-event estimation from surface and medium vertices and multiple
-// importance sampling (power heuristic) against BSDF and phase-function sampling, following Mitsuba
-// 0.6's volpath (MIVolumetricPathTracer) and the path-space view of ALGORITHMS.md §1.1: a medium vertex
+// Path tracer (`path`, and with participating media `volpath`) with next-event estimation from surface and medium
+// vertices and multiple importance sampling (power heuristic) against BSDF and phase-function sampling, following
+// Mitsuba 0.6's volpath (MIVolumetricPathTracer) and the path-space view of ALGORITHMS.md §1.1: a medium vertex
 // scatters with sigma_s * phase, and every edge carries the transmittance tau.
 //
 // * Free-flight sampling decides, on each segment, between a medium interaction and reaching the next
@@ -36,12 +36,12 @@ constexpr int kMaxCrossings = 256;
 // emitter the direction reaches through index-matched surfaces contributes its radiance times the
 // transmittance up to it, and the environment contributes if the direction leaves the scene.
 Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, const Medium *medium, bool trackMedia,
-                       double dirPdf, bool delta) {
+                       double dirPdf, bool delta, Intersection &next) {
     Spectrum L;
     const auto visit = [&](const Intersection &its, const Spectrum &T) {
         if (its.isEmitter()) L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
     };
-    const Spectrum escaped = walkTransmittance(scene, ray, medium, visit, trackMedia);
+    const Spectrum escaped = walkTransmittance(scene, ray, medium, visit, trackMedia, &next);
     if (!escaped.isBlack()) L += escaped * misWeightedEmission(scene, ray, Intersection(), ref, dirPdf, delta);
     return L;
 }
@@ -108,7 +108,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             throughput *= weight;
             ray = Ray(ms.p, wo);
             origin = ms.p;
-            L += throughput * emissionAlong(scene, ray, ms.p, medium, media_, phasePdf, false);
+            L += throughput * emissionAlong(scene, ray, ms.p, medium, media_, phasePdf, false, its);
         } else {
             if (medium) {
                 if (!(ms.pdfFailure > 0)) break;
@@ -159,12 +159,11 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
                 scene.intersect(ray, its);
                 continue;
             }
-            L += throughput *
-                 emissionAlong(scene, ray, origin, medium, media_, bs.pdf, (bs.sampledType & BSDFFlags::Delta) != 0);
+            L += throughput * emissionAlong(scene, ray, origin, medium, media_, bs.pdf,
+                                            (bs.sampledType & BSDFFlags::Delta) != 0, its);
         }
 
-        its = Intersection();
-        scene.intersect(ray, its);
+        // `its` now holds the first surface along the sampled direction, found by emissionAlong.
         scattered = true;
         crossings = 0;
         ++depth;

@@ -14,12 +14,17 @@ constexpr int kMaxCrossings = 256;
 
 // Medium segments run between the points where the walk meets surfaces (not the offset origins of the
 // rays spawned there), so that media are not thinned by the ray epsilon at every crossing.
-Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit) {
+Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit,
+              Intersection *firstHit) {
+    // Nothing to pass through and no medium to attenuate: a plain occlusion query answers it.
+    if (!visit && !firstHit && !scene.hasPassThroughSurfaces() && !(trackMedia && medium))
+        return scene.occluded(ray) ? Spectrum(0.0) : Spectrum(1.0);
     Spectrum T(1.0);
     Vec3 start = ray.o;
     for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
         Intersection its;
         const bool hit = scene.intersect(ray, its);
+        if (crossings == 0 && firstHit) *firstHit = its;
         if (trackMedia && medium) {
             const double length = hit ? (its.p - start).length()
                                       : (std::isfinite(ray.tmax) ? (ray(ray.tmax) - start).length() : kInfinity);
@@ -45,15 +50,15 @@ Spectrum nullTransmittance(const Intersection &its) {
     return bsdf->eval(ctx, its, its.wi, -its.wi, Measure::Discrete);
 }
 
-Spectrum transmittance(const Scene &scene, Ray ray) { return walk(scene, ray, false, nullptr, nullptr); }
+Spectrum transmittance(const Scene &scene, Ray ray) { return walk(scene, ray, false, nullptr, nullptr, nullptr); }
 
 Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, bool trackMedia) {
-    return walk(scene, ray, trackMedia, medium, nullptr);
+    return walk(scene, ray, trackMedia, medium, nullptr, nullptr);
 }
 
 Spectrum walkTransmittance(const Scene &scene, Ray ray, const Medium *medium, const SurfaceVisitor &visit,
-                           bool trackMedia) {
-    return walk(scene, ray, trackMedia, medium, &visit);
+                           bool trackMedia, Intersection *firstHit) {
+    return walk(scene, ray, trackMedia, medium, &visit, firstHit);
 }
 
 const Medium *mediumAfter(const Intersection &its, const Vec3 &d, const Medium *current) {

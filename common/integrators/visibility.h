@@ -32,8 +32,10 @@ using SurfaceVisitor = std::function<void(const Intersection &its, const Spectru
 // (volpath collects the emission of every surface a sampled direction reaches). Calls visit at each
 // surface reached before ray.tmax, the blocking one included; returns the transmittance to ray.tmax
 // (infinite rays: out of the scene), or zero when a surface without a Null lobe is in the way.
+// `firstHit`, if given, receives the first surface along the ray (invalid if none): the next vertex of a
+// path that continues along it, so callers need not trace the same ray again.
 Spectrum walkTransmittance(const Scene &scene, Ray ray, const Medium *medium, const SurfaceVisitor &visit,
-                           bool trackMedia = true);
+                           bool trackMedia = true, Intersection *firstHit = nullptr);
 
 // Null-lobe transmittance of the surface at `its` for a ray passing straight through it
 // (0 for opaque surfaces, 1 for the null BSDF).

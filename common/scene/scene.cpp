@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include "bsdf/bsdf.h"
 #include "shape/analytic.h"
 #include "shape/instance.h"
 #include "shape/shapegroup.h"
@@ -83,7 +84,9 @@ void Scene::finalize() {
     rtcSetSceneBuildQuality(rtc_, RTC_BUILD_QUALITY_HIGH);
     geomToShape_.clear();
     bounds_ = AABB();
+    passThrough_ = false;
     for (const auto &shape : shapes_) {
+        passThrough_ |= shape->bsdf() && (shape->bsdf()->flags() & BSDFFlags::Null);
         const unsigned id = shape->addToEmbree(device_, rtc_);
         if (id >= geomToShape_.size()) geomToShape_.resize(id + 1, nullptr);
         geomToShape_[id] = shape.get();

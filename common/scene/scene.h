@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "core/distribution.h"
-#include "image/film.h"
 #include "emitter/emitter.h"
+#include "image/film.h"
 #include "scene/intersection.h"
 #include "scene/properties.h"
 #include "scene/shape.h"
@@ -70,6 +70,10 @@ public:
     Vec3 boundingSphereCenter() const { return bounds_.center(); }
     double boundingSphereRadius() const { return bounds_.extents().length() * 0.5; }
 
+    // True if some surface lets light pass unchanged (a BSDF with a Null lobe: null, mask, thin dielectric,
+    // index-matched medium boundaries). Without such surfaces a shadow ray is a plain occlusion query.
+    bool hasPassThroughSurfaces() const { return passThrough_; }
+
     // Rays traced (intersect + occluded) by the calling thread so far. Thread-local, so counting costs
     // nothing on the hot path; render loops read it before and after their work.
     static uint64_t threadRayCount();
@@ -88,6 +92,7 @@ private:
     Properties integratorProps_;
     Distribution1D emitterDist_;
     AABB bounds_;
+    bool passThrough_ = false;
 };
 
 // Loads a Mitsuba 0.5/0.6 XML scene. `defines` supplies values for $name parameters (CLI -D), overriding

@@ -1,0 +1,277 @@
+#include "path/path.h"
+
+#include "emitter/emitter.h"
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+// The edge between a supernode and its node carries nothing ([TH A4]: "stateless").
+const PathEdge kStatelessEdge{};
+
+// Whether a connection can end at v: its scattering or emission has a smooth part. The junction copies
+// are smooth vertices of the joined path whatever lobe the walk itself left through. An emitter node on
+// the sensor side is the environment that ended a sensor walk: only s = 0 uses it.
+bool smoothAt(const PathVertex &v, TransportMode side) {
+    if (v.isEndpointNode())
+        return (v.type == VertexType::EmitterNode) == (side == TransportMode::Importance) && !v.hasDeltaDirection();
+    return v.type == VertexType::Medium || (v.its.bsdf()->flags() & BSDFFlags::Smooth) != 0;
+}
+
+}  // namespace
+
+void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int maxVertices, int rrDepth,
+                  const Vec2 &raster) {
+    mode_ = mode;
+    vertices_.clear();
+    edges_.clear();
+    lensHits_.clear();
+    // Room for typical walks up front: growing a vector of vertices one at a time shows in profiles.
+    constexpr size_t kTypicalVertices = 16;
+    vertices_.reserve(kTypicalVertices);
+    edges_.reserve(kTypicalVertices);
+    vertices_.push_back(mode == TransportMode::Importance ? PathVertex::emitterSupernode()
+                                                          : PathVertex::sensorSupernode());
+    PathVertex node;
+    PathEdge unused;
+    if (maxVertices == 0 || !vertices_[0].sampleNext(scene, sampler, mode, nullptr, unused, node)) return;
+    if (mode == TransportMode::Radiance) node.ps.uv = raster;
+    vertices_.push_back(node);
+
+    const Spectrum start = node.throughput;
+    const bool lens = mode == TransportMode::Importance && !scene.sensor().deltaAperture();
+    const int reverse = modeIndex(otherMode(mode));
+    for (int k = 0; maxVertices < 0 || k + 1 < maxVertices; ++k) {
+        // Russian roulette on the throughput gathered since the endpoint, from rrDepth + 1 edges on, as
+        // the path tracer does it. The survival probability divides the next vertex's throughput; MIS
+        // ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
+        double survival = 1.0;
+        if (k > rrDepth) {
+            survival = std::min((vertices_.back().throughput / start).max(), 0.95);
+            if (sampler.next1D() >= survival) break;
+        }
+        const size_t cur = vertices_.size() - 1;
+        PathVertex succ;
+        PathEdge edge;
+        const bool sampled = vertices_[cur].sampleNext(scene, sampler, mode, &vertices_[cur - 1], edge, succ);
+        if (lens && !edge.d.isZero()) recordLensHit(scene, k, edge, survival);
+        if (!sampled) break;
+        succ.throughput *= 1.0 / survival;
+        if (k >= 1)
+            vertices_[cur - 1].pdf[reverse] = vertices_[cur].evalPdf(
+                scene, &succ, vertices_[cur - 1], edges_[static_cast<size_t>(k - 1)], otherMode(mode));
+        vertices_.push_back(succ);
+        edges_.push_back(edge);
+        if (succ.isEndpointNode()) break;  // the sensor walk reached the environment's sphere: it ends there
+    }
+}
+
+void Path::recordLensHit(const Scene &scene, int from, const PathEdge &edge, double survival) {
+    const Sensor &sensor = scene.sensor();
+    const PathVertex &v = vertex(from), &pred = vertex(from - 1);
+    PositionSample ps;
+    double t = 0;
+    if (!sensor.intersectAperture(Ray(v.position(), edge.d, 0.0, edge.length), ps, t)) return;
+    LensHit hit;
+    hit.from = from;
+    hit.vertex = PathVertex::endpointNode(scene, ps, nullptr);
+    hit.vertex.walkMode = TransportMode::Importance;
+    if (!connect(scene, v, hit.vertex, hit.edge)) return;
+    const double pdf = v.evalPdf(scene, &pred, hit.vertex, hit.edge, TransportMode::Importance);
+    if (!(pdf > 0)) return;
+    hit.vertex.pdf[modeIndex(TransportMode::Importance)] = pdf;
+    hit.vertex.pdf[modeIndex(TransportMode::Radiance)] =
+        PathVertex::sensorSupernode().evalPdf(scene, nullptr, hit.vertex, kStatelessEdge, TransportMode::Radiance);
+    // The lens point is a sampled successor like any other: f over p for the sampled direction.
+    hit.vertex.throughput = v.throughput * v.eval(scene, &pred, hit.vertex, TransportMode::Importance) *
+                            edgeTerm(v, hit.vertex, hit.edge) * hit.vertex.cosine(edge.d) / (pdf * survival);
+    if (!hit.vertex.throughput.isBlack()) lensHits_.push_back(hit);
+}
+
+FullPath::FullPath(const PathView &view) {
+    const int n = view.length();
+    for (int i = -1; i <= n; ++i) vertices_.push_back(view.vertex(i));
+    for (int i = 0; i + 1 < n; ++i) edges_.push_back(view.edge(i));
+}
+
+void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int s) {
+    light_ = light;
+    camera_ = camera;
+    a_ = a;
+    b_ = b;
+    s_ = s;
+    ownLightEnd_ = ownCameraEnd_ = false;
+    junction_ = PathEdge();
+    value_ = Spectrum(0.0);
+}
+
+const PathVertex &JoinedPath::vertex(int i) const {
+    const int n = length();
+    if (i < 0) return PathVertex::emitterSupernode();
+    if (i >= n) return PathVertex::sensorSupernode();
+    if (i < a_) return i == a_ - 1 && ownLightEnd_ ? lightEnd_ : light_->vertex(i);
+    const int j = n - 1 - i;
+    return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
+}
+
+const PathEdge &JoinedPath::edge(int i) const {
+    if (i < a_ - 1) return light_->edge(i);
+    if (i == a_ - 1) return junction_;
+    return camera_->edge(length() - 2 - i);
+}
+
+bool JoinedPath::connect(const Scene &scene, const Path &light, int s, const Path &camera, int t) {
+    reset(&light, s, &camera, t, s);
+    lightEnd_ = light.vertex(s - 1);
+    cameraEnd_ = camera.vertex(t - 1);
+    ownLightEnd_ = ownCameraEnd_ = true;
+    return smoothAt(lightEnd_, TransportMode::Importance) && smoothAt(cameraEnd_, TransportMode::Radiance) &&
+           finishConnection(scene);
+}
+
+bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const Path &camera, int t) {
+    reset(nullptr, 1, &camera, t, 1);
+    cameraEnd_ = camera.vertex(t - 1);
+    ownCameraEnd_ = true;
+    if (!smoothAt(cameraEnd_, TransportMode::Radiance)) return false;
+    DirectSample ds(cameraEnd_.position(), cameraEnd_.type == VertexType::Surface ? cameraEnd_.its.n : Vec3());
+    scene.sampleEmitterDirect(ds, u);
+    if (!(ds.pdf > 0) || !ds.object) return false;
+    const auto *emitter = static_cast<const Emitter *>(ds.object);
+    PositionSample ps;
+    ps.p = ds.p;
+    ps.n = ds.n;
+    ps.uv = ds.uv;
+    ps.measure = (emitter->flags() & EmitterFlags::DeltaPosition) ? Measure::Discrete : Measure::Area;
+    lightEnd_ = PathVertex::endpointNode(scene, ps, emitter);
+    lightEnd_.walkMode = TransportMode::Importance;
+    ownLightEnd_ = true;
+    const PathVertex &supernode = PathVertex::emitterSupernode();
+    lightEnd_.pdf[modeIndex(TransportMode::Importance)] =
+        supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
+    const double density = directDensity(scene, lightEnd_, cameraEnd_);
+    if (!(density > 0)) return false;
+    lightEnd_.throughput = supernode.eval(scene, nullptr, lightEnd_, TransportMode::Importance) / density;
+    return finishConnection(scene);
+}
+
+bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Path &light, int s) {
+    reset(&light, s, nullptr, 1, s);
+    lightEnd_ = light.vertex(s - 1);
+    ownLightEnd_ = true;
+    if (!smoothAt(lightEnd_, TransportMode::Importance)) return false;
+    const Sensor &sensor = scene.sensor();
+    DirectSample ds(lightEnd_.position(), lightEnd_.type == VertexType::Surface ? lightEnd_.its.n : Vec3());
+    sensor.sampleDirect(ds, u);
+    if (!(ds.pdf > 0)) return false;
+    PositionSample ps;
+    ps.p = ds.p;
+    ps.n = ds.n;
+    ps.uv = ds.uv;
+    ps.measure = sensor.deltaAperture() ? Measure::Discrete : Measure::Area;
+    cameraEnd_ = PathVertex::endpointNode(scene, ps, nullptr);
+    ownCameraEnd_ = true;
+    const PathVertex &supernode = PathVertex::sensorSupernode();
+    cameraEnd_.pdf[modeIndex(TransportMode::Radiance)] =
+        supernode.evalPdf(scene, nullptr, cameraEnd_, kStatelessEdge, TransportMode::Radiance);
+    const double density = directDensity(scene, cameraEnd_, lightEnd_);
+    if (!(density > 0)) return false;
+    cameraEnd_.throughput = supernode.eval(scene, nullptr, cameraEnd_, TransportMode::Radiance) / density;
+    return finishConnection(scene);
+}
+
+bool JoinedPath::finishConnection(const Scene &scene) {
+    lightEnd_.delta = cameraEnd_.delta = false;
+    const Vec3 toLight = normalize(lightEnd_.position() - cameraEnd_.position());
+    // Light tracing lands wherever the connection enters the sensor.
+    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd_.position(), toLight, cameraEnd_.ps.uv)) return false;
+    const Spectrum fLight = lightEnd_.eval(scene, &vertex(a_ - 2), cameraEnd_, TransportMode::Importance);
+    if (fLight.isBlack()) return false;
+    const Spectrum fCamera = cameraEnd_.eval(scene, &vertex(a_ + 1), lightEnd_, TransportMode::Radiance);
+    if (fCamera.isBlack() || !pf::connect(scene, lightEnd_, cameraEnd_, junction_)) return false;
+    value_ =
+        lightEnd_.throughput * fLight * edgeTerm(lightEnd_, cameraEnd_, junction_) * fCamera * cameraEnd_.throughput;
+    return !value_.isBlack();
+}
+
+bool JoinedPath::hitEmitter(const Scene &scene, const Path &camera, int t) {
+    reset(nullptr, 1, &camera, t - 1, 0);
+    lightEnd_ = camera.vertex(t - 1);
+    ownLightEnd_ = true;
+    if (!lightEnd_.cast(scene, VertexType::EmitterNode)) return false;
+    junction_ = camera.edge(t - 2);
+    const PathVertex &supernode = PathVertex::emitterSupernode();
+    lightEnd_.pdf[modeIndex(TransportMode::Importance)] =
+        supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
+    value_ = lightEnd_.throughput * lightEnd_.eval(scene, &vertex(1), supernode, TransportMode::Radiance) *
+             supernode.eval(scene, &lightEnd_, supernode, TransportMode::Radiance);
+    return !value_.isBlack();
+}
+
+bool JoinedPath::hitLens(const Scene &scene, const Path &light, const LensHit &hit) {
+    reset(&light, hit.from + 1, nullptr, 1, hit.from + 2);
+    cameraEnd_ = hit.vertex;
+    ownCameraEnd_ = true;
+    junction_ = hit.edge;
+    const PathVertex &supernode = PathVertex::sensorSupernode();
+    value_ = cameraEnd_.throughput *
+             cameraEnd_.eval(scene, &light.vertex(hit.from), supernode, TransportMode::Importance) *
+             supernode.eval(scene, &cameraEnd_, supernode, TransportMode::Importance);
+    return !value_.isBlack();
+}
+
+void JoinedPath::densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const {
+    const int n = length(), imp = modeIndex(TransportMode::Importance), rad = modeIndex(TransportMode::Radiance);
+    pFwd.resize(static_cast<size_t>(n));
+    pRev.resize(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        pFwd[static_cast<size_t>(i)] = vertex(i).pdf[imp];
+        pRev[static_cast<size_t>(i)] = vertex(i).pdf[rad];
+    }
+    // The junction between x_{a-1} and x_a gives both ends new neighbours: p<- of the last two emitter-side
+    // vertices and p-> of the first two sensor-side ones change.
+    const int a = a_;
+    const auto at = [](int i) { return static_cast<size_t>(i); };
+    pRev[at(a - 1)] = vertex(a).evalPdf(scene, &vertex(a + 1), vertex(a - 1), edge(a - 1), TransportMode::Radiance);
+    if (a >= 2)
+        pRev[at(a - 2)] = vertex(a - 1).evalPdf(scene, &vertex(a), vertex(a - 2), edge(a - 2), TransportMode::Radiance);
+    pFwd[at(a)] = vertex(a - 1).evalPdf(scene, &vertex(a - 2), vertex(a), edge(a - 1), TransportMode::Importance);
+    if (a + 1 < n)
+        pFwd[at(a + 1)] = vertex(a).evalPdf(scene, &vertex(a - 1), vertex(a + 1), edge(a), TransportMode::Importance);
+}
+
+Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode) {
+    const int n = path.length();
+    const PathVertex &emitterSide = PathVertex::emitterSupernode(), &sensorSide = PathVertex::sensorSupernode();
+    Spectrum f = emitterSide.eval(scene, nullptr, path.vertex(0), TransportMode::Importance) *
+                 sensorSide.eval(scene, nullptr, path.vertex(n - 1), TransportMode::Radiance);
+    for (int i = 0; i < n; ++i) {
+        const PathVertex &v = path.vertex(i);
+        const TransportMode m = mode.value_or(v.walkMode);
+        const int back = m == TransportMode::Importance ? -1 : 1;  // where the walk of m comes from
+        const PathVertex &pred = path.vertex(i + back), &succ = path.vertex(i - back);
+        f *= v.eval(scene, &pred, succ, m);
+        if (!pred.isSupernode()) f *= v.cosine(normalize(pred.position() - v.position()));
+    }
+    for (int i = 0; i + 1 < n; ++i) f *= edgeTerm(path.vertex(i), path.vertex(i + 1), path.edge(i));
+    return f;
+}
+
+void evalDensities(const Scene &scene, const PathView &path, std::vector<double> &pFwd, std::vector<double> &pRev) {
+    const int n = path.length();
+    pFwd.resize(static_cast<size_t>(n));
+    pRev.resize(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        // x_i as the emitter walk reaches it from x_{i-1} (x_{-1}: the supernode, which has no predecessor),
+        // and as the sensor walk reaches it from x_{i+1}.
+        const PathVertex *fromEmitter = i >= 1 ? &path.vertex(i - 2) : nullptr;
+        const PathVertex *fromSensor = i + 1 < n ? &path.vertex(i + 2) : nullptr;
+        pFwd[static_cast<size_t>(i)] = path.vertex(i - 1).evalPdf(
+            scene, fromEmitter, path.vertex(i), i >= 1 ? path.edge(i - 1) : kStatelessEdge, TransportMode::Importance);
+        pRev[static_cast<size_t>(i)] = path.vertex(i + 1).evalPdf(
+            scene, fromSensor, path.vertex(i), i + 1 < n ? path.edge(i) : kStatelessEdge, TransportMode::Radiance);
+    }
+}
+
+}  // namespace pf

@@ -1,0 +1,131 @@
+// Subpaths and complete paths of the path-space layer ([TH A4]; ALGORITHMS.md §1.1, §1.4).
+//
+// A subpath is a random walk from one supernode: SAMPLENEXT until the walk ends (it leaves the scene, is
+// absorbed, or Russian roulette stops it). A complete path x_0 .. x_{n-1} (light order) is seen through
+// PathView: JoinedPath assembles one from the first s vertices of an emitter subpath and the first t of
+// a sensor subpath, as the BDPT strategy (s, t) produces it, without copying the subpaths; FullPath
+// holds a copy (for tests, and for Markov chains that mutate paths).
+//
+// Random numbers: a walk draws from its sampler in vertex order (vertex.h lists the count per vertex),
+// so a subpath is a pure function of the sampler's stream and its first k vertices do not depend on
+// how long the walk runs. Russian roulette draws one more number per vertex from rrDepth edges on.
+#pragma once
+#include <optional>
+#include <vector>
+
+#include "path/vertex.h"
+
+namespace pf {
+
+// The emitter walk crossing a finite lens (BDPT's t = 0 strategy). The lens is not part of the scene:
+// the walk goes on behind it, and the lens point is kept as a second successor of vertex `from`.
+struct LensHit {
+    int from = 0;
+    PathEdge edge;
+    PathVertex vertex;
+};
+
+class Path {
+public:
+    // Samples a walk of `mode` (Importance: from the emitters; Radiance: from the sensor, through raster
+    // position `raster`) with at most maxVertices vertices (-1: unbounded) besides the supernode, and
+    // Russian roulette once the walk has rrDepth edges. The emitter walk records where it crosses a finite
+    // lens. Along the way each vertex gets its reverse density (p of the other walk) as soon as its two
+    // successors are known (ALGORITHMS.md §1.4).
+    void sample(const Scene &scene, Sampler &sampler, TransportMode mode, int maxVertices, int rrDepth,
+                const Vec2 &raster = {});
+
+    TransportMode mode() const { return mode_; }
+    int size() const { return static_cast<int>(vertices_.size()) - 1; }
+    // Vertex i of the walk, 0 being the endpoint node; -1 is the supernode.
+    const PathVertex &vertex(int i) const { return vertices_[static_cast<size_t>(i + 1)]; }
+    // The edge between vertex(i) and vertex(i + 1), i >= 0.
+    const PathEdge &edge(int i) const { return edges_[static_cast<size_t>(i)]; }
+    const std::vector<LensHit> &lensHits() const { return lensHits_; }
+
+private:
+    void recordLensHit(const Scene &scene, int from, const PathEdge &edge, double survival);
+
+    TransportMode mode_ = TransportMode::Radiance;
+    std::vector<PathVertex> vertices_;
+    std::vector<PathEdge> edges_;
+    std::vector<LensHit> lensHits_;
+};
+
+// A complete path x_0 .. x_{n-1} in light order; vertex(-1) and vertex(n) are the supernodes.
+class PathView {
+public:
+    virtual ~PathView() = default;
+    virtual int length() const = 0;
+    virtual const PathVertex &vertex(int i) const = 0;
+    // The edge between vertex(i) and vertex(i + 1), 0 <= i < length() - 1.
+    virtual const PathEdge &edge(int i) const = 0;
+};
+
+class FullPath final : public PathView {
+public:
+    explicit FullPath(const PathView &view);
+    int length() const override { return static_cast<int>(vertices_.size()) - 2; }
+    const PathVertex &vertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
+    const PathEdge &edge(int i) const override { return edges_[static_cast<size_t>(i)]; }
+
+private:
+    std::vector<PathVertex> vertices_;
+    std::vector<PathEdge> edges_;
+};
+
+// The path of one BDPT strategy (ALGORITHMS.md §0): s vertices from the emitter walk, t from the sensor
+// walk. The builders return false when the strategy carries nothing for these subpaths (a Dirac vertex
+// at the junction, an occluded or zero connection, a sample leaving the film).
+class JoinedPath final : public PathView {
+public:
+    // CONNECT ([TH A4]) emitter vertex s - 1 with sensor vertex t - 1 (s, t >= 1). The junction vertices
+    // are copied, so that the connection can update what it changes.
+    bool connect(const Scene &scene, const Path &light, int s, const Path &camera, int t);
+    // s = 1 with the emitter node sampled directly from sensor vertex t - 1 (two numbers u).
+    bool connectDirectEmitter(const Scene &scene, const Vec2 &u, const Path &camera, int t);
+    // t = 1 with the sensor node sampled directly from emitter vertex s - 1 (light tracing).
+    bool connectDirectSensor(const Scene &scene, const Vec2 &u, const Path &light, int s);
+    // s = 0: sensor vertex t - 1 lies on an emitter (CAST to an emitter node).
+    bool hitEmitter(const Scene &scene, const Path &camera, int t);
+    // t = 0: the emitter walk crossed the lens.
+    bool hitLens(const Scene &scene, const Path &light, const LensHit &hit);
+
+    int length() const override { return a_ + b_; }
+    const PathVertex &vertex(int i) const override;
+    const PathEdge &edge(int i) const override;
+    // s and t of the strategy that built the path.
+    int lightVertices() const { return s_; }
+    int sensorVertices() const { return length() - s_; }
+    // f / p of the strategy that built the path (the unweighted BDPT contribution).
+    const Spectrum &contribution() const { return value_; }
+    // Where the path meets the film.
+    const Vec2 &raster() const { return vertex(length() - 1).ps.uv; }
+    // The densities of every vertex as BDPT keeps them: those stored by the walks, and the four that the
+    // junction changes recomputed with EVALPDF (ALGORITHMS.md §1.4).
+    void densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const;
+
+private:
+    void reset(const Path *light, int a, const Path *camera, int b, int s);
+    // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, and f / p.
+    bool finishConnection(const Scene &scene);
+
+    const Path *light_ = nullptr, *camera_ = nullptr;
+    int a_ = 0, b_ = 0, s_ = 0;        // vertices taken from each side (including the ends below); strategy s
+    PathVertex lightEnd_, cameraEnd_;  // replace light vertex a - 1 / sensor vertex b - 1 when owned
+    bool ownLightEnd_ = false, ownCameraEnd_ = false;
+    PathEdge junction_;  // between vertex(a - 1) and vertex(a)
+    Spectrum value_;
+};
+
+// The measurement contribution f(x) of ALGORITHMS.md §1.1 as the product of the EVAL terms, each vertex
+// evaluated as the walk that sampled its successor evaluates it, or all in `mode`. The modes agree on
+// every vertex except Dirac refractions: a discrete weight carries the solid-angle compression of the
+// side it is measured from. Evaluated per walk, f / p_s is exactly the contribution that strategy s
+// estimates, with the densities of evalDensities.
+Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode = {});
+
+// EVALPDF at every vertex of the path: pFwd[i] = p->(x_i) from the emitter side, pRev[i] = p<-(x_i).
+void evalDensities(const Scene &scene, const PathView &path, std::vector<double> &pFwd, std::vector<double> &pRev);
+
+}  // namespace pf

@@ -1,0 +1,53 @@
+// The Markov chain of Veach's path-space MLT and of ERPT (Veach & Guibas 1997; Veach 1997 ch. 11; Cline et
+// al. 2005): the state is a complete path x, the target pi(x) is the luminance of its contribution in the
+// canonical measure (path/mutation.h; ALGORITHMS.md §2.2), and a transition selects one of the enabled
+// mutations with probability proportional to applicability and draws a proposal from it. The core
+// (mcmc/metropolis.h) accepts, and records with expected values; deposits are f / pi at the path's raster
+// position (ALGORITHMS.md §2.2), unfiltered like every chain deposit.
+#pragma once
+#include "image/film.h"
+#include "mcmc/metropolis.h"
+#include "path/mutation.h"
+
+namespace pf {
+
+class PathChain final : public MarkovChain {
+public:
+    // pi is zero outside minVertices .. maxVertices vertices (maxVertices < 0: unbounded): paths left to
+    // a separately rendered component, or beyond maxDepth. Deposits go to `film`, times `scale`.
+    PathChain(const Scene &scene, const MutationSet &mutations, int minVertices, int maxVertices, ImageBlock &film,
+              double scale);
+    // The counts of a chain whose MutationSet holds `types` in this order (Proposal::type), then "none":
+    // steps at which no mutation applies to the current path (the chain stays).
+    static MutationCounts mutationTypes(const std::vector<MutationType> &types);
+
+    // Starts on x and returns pi(x).
+    double start(const PathView &x);
+    const MutablePath &current() const { return current_.path; }
+
+    double target() const override { return current_.target; }
+    Proposal propose(PCG32 &rng) override;
+    void accept() override { std::swap(current_, proposed_); }
+    void reject() override {}
+    void splatCurrent(double weight) override { deposit(current_, weight); }
+    void splatProposed(double weight) override { deposit(proposed_, weight); }
+
+private:
+    struct State {
+        MutablePath path;
+        Spectrum f;
+        double target = 0;
+    };
+    // Fills f and the target of state.path.
+    void evaluate(State &state) const;
+    void deposit(const State &state, double weight);
+
+    const Scene &scene_;
+    const MutationSet &mutations_;
+    int minVertices_, maxVertices_;
+    ImageBlock &film_;
+    double scale_;
+    State current_, proposed_;
+};
+
+}  // namespace pf

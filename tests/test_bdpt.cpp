@@ -1,0 +1,365 @@
+// Bidirectional path tracing: agreement with the path tracer on every shared scene, closed-form scenes,
+// the per-strategy images, determinism, regeneration of recorded paths, and parameter checking.
+//
+// Comparisons are per-block means of images rendered with independent seeds: each seed's image is an
+// independent estimate, so the seed-to-seed spread of a block mean gives its standard error, whatever
+// the correlations between pixels (light tracing splats one light path into several pixels).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "integrators/bdpt.h"
+#include "support/render_util.h"
+
+namespace pf::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readText(const fs::path &path) {
+    std::ifstream in(path);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+struct Edit {
+    std::string from, to;
+};
+
+// A shared scene with a box reconstruction filter: light tracing splats into the pixel it hits without a
+// filter, so a comparison with the path tracer needs the same one-pixel footprint on both sides. `edits`
+// are applied to the XML; the scene's other files are linked next to the edited copy.
+std::unique_ptr<Scene> loadSharedScene(const std::string &name, int res, const std::vector<Edit> &edits = {}) {
+    const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" / name;
+    const std::string dir = tempDir("bdpt-scene-" + name);
+    for (const auto &entry : fs::directory_iterator(src))
+        if (entry.path().filename() != "scene.xml")
+            fs::create_symlink(entry.path(), fs::path(dir) / entry.path().filename());
+    std::string xml = std::regex_replace(readText(src / "scene.xml"), std::regex(R"(<rfilter type="[a-z]+"\s*/>)"),
+                                         R"(<rfilter type="box"/>)");
+    for (const Edit &e : edits) {
+        const size_t at = xml.find(e.from);
+        EXPECT_NE(at, std::string::npos) << name << ": no '" << e.from << "' to edit";
+        if (at != std::string::npos) xml.replace(at, e.from.size(), e.to);
+    }
+    auto scene = loadScene(writeFile(dir, "scene.xml", xml));
+    scene->resizeFilm(res, res);
+    return scene;
+}
+
+struct BlockStats {
+    std::vector<double> mean, stderr_;  // per block and channel, then the whole image's luminance
+};
+
+BlockStats blockStats(const Scene &scene, const Integrator &integrator, int block, int seeds, int spp) {
+    const Film &film = scene.sensor().film();
+    const int nx = film.cropWidth() / block, ny = film.cropHeight() / block;
+    std::vector<double> sum(static_cast<size_t>(nx * ny * 3 + 1), 0.0), sum2(sum.size(), 0.0);
+    for (int k = 0; k < seeds; ++k) {
+        RenderOptions opt;
+        opt.spp = spp;
+        opt.seed = 7919 * static_cast<uint64_t>(k + 1);
+        opt.threads = 1;
+        RenderStats stats;
+        const Bitmap img = integrator.render(scene, opt, stats);
+        for (int by = 0; by < ny; ++by)
+            for (int bx = 0; bx < nx; ++bx)
+                for (int c = 0; c < 3; ++c) {
+                    const double v =
+                        regionMean(img, bx * block, by * block, (bx + 1) * block, (by + 1) * block, c).mean;
+                    sum[static_cast<size_t>((by * nx + bx) * 3 + c)] += v;
+                    sum2[static_cast<size_t>((by * nx + bx) * 3 + c)] += v * v;
+                }
+        const double v = regionMean(img, 0, 0, nx * block, ny * block).mean;
+        sum.back() += v;
+        sum2.back() += v * v;
+    }
+    BlockStats r;
+    for (size_t i = 0; i < sum.size(); ++i) {
+        const double mean = sum[i] / seeds;
+        r.mean.push_back(mean);
+        r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
+    }
+    return r;
+}
+
+// Block means of BDPT and of a reference must agree within 5 combined standard errors (32 seeds: a
+// Student t with 31 degrees of freedom, so that the ~400 comparisons of this file raise a false alarm with
+// probability under 1%), and the errors must be small enough for that to mean something: the median
+// block error under 3% of its mean. The whole image's luminance is compared too.
+constexpr int kSeeds = 32, kBlock = 8;
+
+void expectAgreement(const BlockStats &a, const BlockStats &b, const std::string &what) {
+    std::vector<double> relative;
+    const double imageMean = a.mean.back();
+    for (size_t i = 0; i < a.mean.size(); ++i) {
+        const double se = std::hypot(a.stderr_[i], b.stderr_[i]);
+        const bool whole = i + 1 == a.mean.size();
+        EXPECT_NEAR(b.mean[i], a.mean[i], 5 * se)
+            << what
+            << (whole ? ": whole image" : ": block " + std::to_string(i / 3) + " channel " + std::to_string(i % 3));
+        if (!whole && a.mean[i] > 0.01 * imageMean) relative.push_back(se / a.mean[i]);
+    }
+    ASSERT_FALSE(relative.empty());
+    std::sort(relative.begin(), relative.end());
+    const double median = relative[relative.size() / 2];
+    EXPECT_LT(median, 0.03) << what << ": too noisy to compare";
+    std::printf("%s: median block standard error %.2f%%, image %.4g vs %.4g +- %.2g\n", what.c_str(), 100 * median,
+                b.mean.back(), a.mean.back(), std::hypot(a.stderr_.back(), b.stderr_.back()));
+}
+
+void expectAgreement(const Scene &scene, const Integrator &reference, int referenceSpp, const Integrator &bdpt,
+                     int bdptSpp, const std::string &what) {
+    expectAgreement(blockStats(scene, reference, kBlock, kSeeds, referenceSpp),
+                    blockStats(scene, bdpt, kBlock, kSeeds, bdptSpp), what);
+}
+
+std::unique_ptr<Integrator> fileIntegrator(const Scene &scene, const std::string &type) {
+    return createIntegrator(type, scene.integratorProperties(), false);
+}
+
+// Every shared scene, with the scene's own maxDepth and strictNormals. Two need a larger light for the
+// path tracer to converge in test time, which leaves their light transport the same: the ring's 0.2 x 0.2
+// light is seen through the gold mirror only by paths that hit it by chance (x15 in size, same radiance),
+// and the volumetric caustic's 5 x 4 mm light only through the glass sphere (x40, radiance / 1600).
+struct SharedScene {
+    std::string name;
+    std::vector<Edit> edits;
+    int resolution, referenceSpp, bdptSpp;
+};
+
+class SharedScenes : public ::testing::TestWithParam<SharedScene> {};
+
+TEST_P(SharedScenes, AgreeWithThePathTracer) {
+    const SharedScene &p = GetParam();
+    auto scene = loadSharedScene(p.name, p.resolution, p.edits);
+    // volumetric-caustic names volpath; the others path.
+    const std::string reference = scene->integratorProperties().pluginName();
+    expectAgreement(*scene, *fileIntegrator(*scene, reference), p.referenceSpp, *fileIntegrator(*scene, "bdpt"),
+                    p.bdptSpp, p.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, SharedScenes,
+    ::testing::Values(SharedScene{"cornell-box", {}, 32, 8, 2}, SharedScene{"veach-mis", {}, 32, 8, 2},
+                      SharedScene{"veach-bidir", {}, 24, 64, 4},
+                      SharedScene{"ring-caustic",
+                                  {{R"(<scale x="0.1" y="0.1" z="0.1"/>)", R"(<scale x="1.5" y="1.5" z="1.5"/>)"}},
+                                  32,
+                                  32,
+                                  4},
+                      SharedScene{"volumetric-caustic",
+                                  {{"-0.0025 -1.91069e-015", "-0.1 -1.91069e-015"},
+                                   {"0 -0.002 -8.74228e-011", "0 -0.08 -8.74228e-011"},
+                                   {"541127, 381972, 127324", "338.2, 238.7, 79.58"}},
+                                  24,
+                                  64,
+                                  4}),
+    [](const ::testing::TestParamInfo<SharedScene> &info) {
+        std::string name = info.param.name;
+        for (char &c : name)
+            if (c == '-') c = '_';
+        return name;
+    });
+
+// A thin lens (so that the emitter walk can hit the lens: t = 0), an environment or parallel light, an
+// index-matched box of fog, glass, glossy and mixed surfaces, an area light and a point light behind the
+// camera (through a lens a visible point light would be a blurred disk that the path tracer cannot see).
+std::string lensScene(const std::string &sky, int maxDepth, int res, double aperture = 0.15) {
+    const std::string skyEmitter =
+        sky == "directional" ? R"(<emitter type="directional"><vector name="direction" x="-0.3" y="-1" z="-0.2"/>
+                 <spectrum name="irradiance" value="0.5"/></emitter>)"
+                             : R"(<emitter type="constant"><spectrum name="radiance" value="0.2"/></emitter>)";
+    return R"(<scene version="0.6.0">
+        <integrator type="volpath"><integer name="maxDepth" value=")" +
+           std::to_string(maxDepth) + R"("/>
+            <boolean name="strictNormals" value="true"/></integrator>
+        <sensor type="thinlens"><float name="apertureRadius" value=")" +
+           std::to_string(aperture) + R"("/>
+            <float name="focusDistance" value="4"/><float name="fov" value="50"/>
+            <transform name="toWorld"><lookat origin="0, 1, 5" target="0, 0.8, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value=")" +
+           std::to_string(res) + R"("/>
+                <integer name="height" value=")" +
+           std::to_string(res) + R"("/><rfilter type="box"/></film></sensor>
+        <medium type="homogeneous" id="fog"><rgb name="sigmaS" value="0.6, 0.8, 1.0"/><rgb name="sigmaA" value="0.1"/>
+            <phase type="hg"><float name="g" value="0.4"/></phase></medium>
+        <shape type="rectangle"><transform name="toWorld"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+            <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.5, 0.4"/></bsdf></shape>
+        <shape type="rectangle"><transform name="toWorld"><scale value="3"/><translate z="-2"/></transform>
+            <bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></shape>
+        <shape type="cube"><transform name="toWorld"><scale value="0.5"/><translate x="1" y="0.5"/></transform>
+            <ref name="interior" id="fog"/></shape>
+        <shape type="sphere"><point name="center" x="-1" y="0.6" z="0"/><float name="radius" value="0.5"/>
+            <bsdf type="roughdielectric"><float name="alpha" value="0.2"/></bsdf></shape>
+        <shape type="sphere"><point name="center" x="0" y="0.4" z="1"/><float name="radius" value="0.4"/>
+            <bsdf type="plastic"/></shape>
+        <shape type="rectangle"><transform name="toWorld"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="3"/>
+            </transform><emitter type="area"><spectrum name="radiance" value="6"/></emitter></shape>
+        <emitter type="point"><point name="position" x="1" y="2" z="5.5"/><spectrum name="intensity" value="3"/></emitter>
+        )" +
+           skyEmitter + "</scene>";
+}
+
+TEST(BDPT, AgreesWithVolpathThroughALens) {
+    for (const std::string sky : {"constant", "directional"}) {
+        auto scene = loadScene(writeFile(tempDir("bdpt-lens-" + sky), "scene.xml", lensScene(sky, 6, 32)));
+        expectAgreement(*scene, *fileIntegrator(*scene, "volpath"), 16, *fileIntegrator(*scene, "bdpt"), 2, sky);
+    }
+}
+
+// Every variant of the estimator is unbiased on a scene without Dirac paths that only light tracing finds:
+// the balance heuristic, no direct sampling, no light image.
+TEST(BDPT, VariantsAgree) {
+    auto scene = loadSharedScene("cornell-box", 32);
+    const Properties &fileProps = scene->integratorProperties();
+    const auto variant = [&](const std::string &name, Properties::Type type, const Properties::Value &value) {
+        Properties props(ObjectKind::Integrator, "bdpt", {});
+        props.set("maxDepth", Properties::Type::Integer, fileProps.getInt("maxDepth"), {});
+        props.set(name, type, value, {});
+        return createIntegrator("bdpt", props, true);
+    };
+    const BlockStats path = blockStats(*scene, *fileIntegrator(*scene, "path"), kBlock, kSeeds, 8);
+    const auto check = [&](const std::unique_ptr<Integrator> &bdpt, const std::string &what) {
+        expectAgreement(path, blockStats(*scene, *bdpt, kBlock, kSeeds, 2), what);
+    };
+    check(variant("heuristic", Properties::Type::String, std::string("balance")), "balance heuristic");
+    check(variant("sampleDirect", Properties::Type::Boolean, false), "no direct sampling");
+    check(variant("lightImage", Properties::Type::Boolean, false), "no light image");
+}
+
+// Camera at the centre of a sphere that emits Le inwards and reflects diffusely with albedo rho: every
+// pixel sees Le (1 + rho + ... + rho^(maxDepth - 1)). maxDepth counts edges as in the path tracer.
+TEST(BDPT, MaxDepthCountsEdgesLikeThePathTracer) {
+    const double Le = 1.0, rho = 0.5;
+    double expected = 0, term = Le;
+    for (int depth = 1; depth <= 4; ++depth) {
+        expected += term;
+        term *= rho;
+        const std::string xml = R"(<scene version="0.6.0"><integrator type="bdpt"><integer name="maxDepth" value=")" +
+                                std::to_string(depth) + R"("/></integrator>
+            <sensor type="perspective"><transform name="toWorld"><lookat origin="0, 0, 0" target="0, 0, 1"/></transform>
+                <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+            <shape type="sphere"><float name="radius" value="10"/><boolean name="flipNormals" value="true"/>
+                <bsdf type="diffuse"><spectrum name="reflectance" value=")" +
+                                std::to_string(rho) +
+                                R"("/></bsdf><emitter type="area"><spectrum name="radiance" value=")" +
+                                std::to_string(Le) + R"("/></emitter></shape></scene>)";
+        const RenderOutput out = renderXml(xml, "bdpt", 16, 3);
+        const MeanCI m = regionMean(out.image, 0, 0, out.image.width, out.image.height);
+        EXPECT_LT(m.stderr_, 0.005 * expected) << "maxDepth " << depth << ": too noisy";
+        EXPECT_NEAR(m.mean, expected, 4 * m.stderr_ + 1e-9) << "maxDepth " << depth;
+    }
+}
+
+// The per-strategy images (s + t <= maxDepth + 1) add up to the image, and the strategyImages parameter
+// writes them.
+TEST(BDPT, StrategyImagesSumToTheImage) {
+    const std::string dir = tempDir("bdpt-strategies");
+    auto scene = loadScene(writeFile(dir, "scene.xml", lensScene("constant", 4, 16, 0.5)));
+    Properties props(ObjectKind::Integrator, "bdpt", {});
+    props.set("maxDepth", Properties::Type::Integer, int64_t(4), {});
+    props.set("strategyImages", Properties::Type::String, dir + "/strategies", {});
+    const BDPT bdpt(props);
+    RenderOptions opt;
+    opt.spp = 4;
+    opt.seed = 5;
+    opt.threads = 2;
+    RenderStats stats;
+    const Bitmap image = bdpt.render(*scene, opt, stats);
+    const std::vector<StrategyImage> strategies = bdpt.renderStrategyImages(*scene, opt);
+    ASSERT_EQ(strategies.size(), 3u + 4u + 5u + 6u);  // n = 2 .. 5 vertices, n + 1 strategies each
+    std::vector<double> sum(image.rgb.size(), 0.0);
+    double lens = 0, hits = 0;
+    for (const StrategyImage &si : strategies) {
+        const auto [s, t] = si.strategy;
+        EXPECT_TRUE(fs::exists(dir + "/strategies/s" + std::to_string(s) + "_t" + std::to_string(t) + ".exr"));
+        for (size_t i = 0; i < sum.size(); ++i) {
+            sum[i] += si.image.rgb[i];
+            if (t == 0) lens += si.image.rgb[i];
+            if (s == 0) hits += si.image.rgb[i];
+        }
+    }
+    EXPECT_GT(lens, 0.0) << "the emitter walk never hit the lens";
+    EXPECT_GT(hits, 0.0);
+    for (size_t i = 0; i < sum.size(); ++i) EXPECT_NEAR(sum[i], image.rgb[i], 1e-5 * std::max(1.0, std::abs(sum[i])));
+}
+
+// Same seed, same bits with one and two threads, light-traced splats included.
+TEST(BDPT, SameBitsWithOneAndTwoThreads) {
+    const std::string xml = lensScene("constant", 5, 24);
+    const RenderOutput a = renderXml(xml, "bdpt", 4, 7, 1), b = renderXml(xml, "bdpt", 4, 7, 2);
+    ASSERT_EQ(a.image.rgb.size(), b.image.rgb.size());
+    EXPECT_EQ(0, std::memcmp(a.image.rgb.data(), b.image.rgb.data(), a.image.rgb.size() * sizeof(float)));
+    const RenderOutput c = renderXml(xml, "bdpt", 4, 8, 2);
+    EXPECT_NE(0, std::memcmp(a.image.rgb.data(), c.image.rgb.data(), a.image.rgb.size() * sizeof(float)))
+        << "a different seed must give a different image";
+}
+
+// A path recorded as (pixel, sample index, s, t) regenerates exactly from the seed: the same weighted
+// contribution bits, and the same path.
+TEST(BDPT, RegeneratesRecordedPaths) {
+    auto scene = loadScene(writeFile(tempDir("bdpt-records"), "scene.xml", lensScene("constant", 5, 8)));
+    Properties props(ObjectKind::Integrator, "bdpt", {});
+    const BDPT bdpt(props);
+    constexpr uint64_t kSeed = 99;
+    const Film &film = scene->sensor().film();
+    int records = 0;
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x)
+            for (uint64_t index = 0; index < 2; ++index) {
+                // The sample as the render loop draws it (render/image_task.cpp).
+                const uint64_t pixel = static_cast<uint64_t>(y) * film.width() + x;
+                IndependentSampler sampler(kSeed, pixel, index);
+                const Vec2 raster = Vec2(x, y) + sampler.next2D();
+                bdpt.evaluate(*scene, sampler, raster, [&](const StrategySample &original) {
+                    const FullPath path(*original.path);
+                    const Spectrum f = contribution(*scene, path);
+                    const PathRecord record{pixel, index, original.s, original.t};
+                    int found = 0;
+                    EXPECT_TRUE(bdpt.regenerate(*scene, kSeed, record, [&](const StrategySample &again) {
+                        ++found;
+                        EXPECT_EQ(again.value, original.value);
+                        EXPECT_EQ(again.raster.x, original.raster.x);
+                        EXPECT_EQ(again.raster.y, original.raster.y);
+                        const FullPath regenerated(*again.path);
+                        ASSERT_EQ(regenerated.length(), path.length());
+                        for (int i = 0; i < path.length(); ++i)
+                            EXPECT_EQ(regenerated.vertex(i).position(), path.vertex(i).position());
+                        EXPECT_EQ(contribution(*scene, regenerated), f);
+                    }));
+                    EXPECT_EQ(found, 1);
+                    ++records;
+                });
+            }
+    EXPECT_GT(records, 200);
+}
+
+TEST(BDPT, RejectsBadParameters) {
+    const auto make = [](const std::string &name, Properties::Type type, const Properties::Value &value) {
+        Properties props(ObjectKind::Integrator, "bdpt", {});
+        props.set(name, type, value, {});
+        return createIntegrator("bdpt", props, true);
+    };
+    EXPECT_THROW(make("maxDepth", Properties::Type::Integer, int64_t(0)), SceneError);
+    EXPECT_THROW(make("maxDepth", Properties::Type::Integer, int64_t(-2)), SceneError);
+    EXPECT_THROW(make("rrDepth", Properties::Type::Integer, int64_t(0)), SceneError);
+    EXPECT_THROW(make("heuristic", Properties::Type::String, std::string("cutoff")), SceneError);
+    EXPECT_THROW(make("strategyImages", Properties::Type::String, std::string("out")), SceneError)
+        << "per-strategy images need a finite maxDepth";
+    EXPECT_THROW(make("maxDepht", Properties::Type::Integer, int64_t(3)), SceneError) << "misspelt parameter";
+    EXPECT_THROW(make("strictNormals", Properties::Type::Boolean, true), SceneError) << "not a bdpt parameter";
+    EXPECT_THROW(make("lightImage", Properties::Type::Integer, int64_t(1)), SceneError) << "wrong type";
+    EXPECT_NO_THROW(make("sampleDirect", Properties::Type::Boolean, false));
+}
+
+}  // namespace
+}  // namespace pf::test
