@@ -60,16 +60,9 @@ Chi2Result chi2Histogram(const std::vector<double> &observed, const std::vector<
     std::ostringstream worst;
     double worstTerm = 0;
     for (size_t k : order) {
-        if (expected[k] == 0) {
-            if (observed[k] > 0) {
-                r.report = "a sample landed in a cell of zero expected count (cell " + std::to_string(k) + ", " +
-                           std::to_string(observed[k]) + " samples): the sampler produces directions the pdf denies";
-                r.passed = false;
-                r.pValue = 0;
-                return r;
-            }
-            continue;
-        }
+        // Cells the pdf gives (numerically) no mass are pooled with the other small cells: samples there
+        // still count against the pool's tiny expectation, so a sampler that leaves the pdf's support
+        // fails, while a support edge that the quadrature grid just misses does not.
         if (expected[k] < 5) {
             pooledObs += observed[k];
             pooledExp += expected[k];
@@ -125,8 +118,11 @@ Chi2Result chi2Sphere(const DirectionSampler &sample, const DirectionPdf &pdf, c
         const int p = std::min(nP - 1, static_cast<int>(phi / (2 * kPi) * nP));
         observed[static_cast<size_t>(t) * nP + p] += 1.0;
     }
-    // Integrate the pdf over each bin with composite Simpson in (cos theta, phi): dω = dz dphi.
+    // Integrate the pdf over each bin with composite Simpson in (cos theta, phi): dω = dz dphi. The end
+    // nodes sit a hair inside the bin, so that a density with a support edge on a bin boundary
+    // (hemispheres, cones) is not smeared into the neighbouring bin.
     const int res = opt.integrationRes;
+    const double inset = 1e-9;
     double total = 0;
     for (int t = 0; t < nT; ++t) {
         const double z0 = -1.0 + 2.0 * t / nT, dz = 2.0 / nT / res;
@@ -135,10 +131,11 @@ Chi2Result chi2Sphere(const DirectionSampler &sample, const DirectionPdf &pdf, c
             double acc = 0;
             for (int i = 0; i <= res; ++i) {
                 const double wi = (i == 0 || i == res) ? 1 : (i % 2 ? 4 : 2);
-                const double z = clamp(z0 + i * dz, -1.0, 1.0), r = safeSqrt(1 - z * z);
+                const double zi = z0 + i * dz + (i == 0 ? inset : (i == res ? -inset : 0.0));
+                const double z = clamp(zi, -1.0, 1.0), r = safeSqrt(1 - z * z);
                 for (int j = 0; j <= res; ++j) {
                     const double wj = (j == 0 || j == res) ? 1 : (j % 2 ? 4 : 2);
-                    const double phi = p0 + j * dp;
+                    const double phi = p0 + j * dp + (j == 0 ? inset : (j == res ? -inset : 0.0));
                     acc += wi * wj * pdf(Vec3(r * std::cos(phi), r * std::sin(phi), z));
                 }
             }
