@@ -1,14 +1,16 @@
 // The `pathfarm` command line. `pathfarm render SCENE` renders on this machine (the embedded default);
-// the farm commands (submit, watch, fetch, ...) arrive with the farm.
+// the farm commands (submit, status, watch, fetch, cancel, workers, health) talk to a farm master.
 #include <CLI/CLI.hpp>
 #include <chrono>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <thread>
 
 #include "core/error.h"
+#include "farm/job_setup.h"
+#include "farm_commands.h"
 #include "image/bitmap.h"
 #include "image/film.h"
 #include "integrators/integrator.h"
@@ -26,63 +28,12 @@ struct RenderArgs {
     bool quiet = false;
 };
 
-std::vector<std::pair<std::string, std::string>> parseDefines(const std::vector<std::string> &defs) {
-    std::vector<std::pair<std::string, std::string>> out;
-    for (const std::string &d : defs) {
-        const auto eq = d.find('=');
-        if (eq == std::string::npos || eq == 0)
-            throw pf::SceneError("-D " + d + ": expected name=value");
-        out.emplace_back(d.substr(0, eq), d.substr(eq + 1));
-    }
-    return out;
-}
-
-// -P name=value: an integrator parameter, typed like the scene file would (boolean, integer, float,
-// else string), replacing the file's value.
-void applyParams(pf::Properties &props, const std::vector<std::string> &params) {
-    for (const std::string &p : params) {
-        const auto eq = p.find('=');
-        if (eq == std::string::npos || eq == 0) throw pf::SceneError("-P " + p + ": expected name=value");
-        const std::string name = p.substr(0, eq), value = p.substr(eq + 1);
-        const pf::SourceLocation loc{"command line (-P " + p + ")", 0};
-        props.remove(name);
-        char *end = nullptr;
-        if (value == "true" || value == "false") {
-            props.set(name, pf::Properties::Type::Boolean, value == "true", loc);
-        } else if (const long long i = std::strtoll(value.c_str(), &end, 10); !value.empty() && *end == '\0') {
-            props.set(name, pf::Properties::Type::Integer, static_cast<int64_t>(i), loc);
-        } else if (const double d = std::strtod(value.c_str(), &end); !value.empty() && *end == '\0') {
-            props.set(name, pf::Properties::Type::Float, d, loc);
-        } else {
-            props.set(name, pf::Properties::Type::String, value, loc);
-        }
-    }
-}
-
-std::string defaultOutput(const std::string &scenePath) {
-    std::filesystem::path p(scenePath);
-    const std::string stem = p.stem() == "scene" && p.has_parent_path() ? p.parent_path().filename().string()
-                                                                           : p.stem().string();
-    return stem + ".exr";
-}
-
 int runRender(const RenderArgs &a) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
-    auto scene = pf::loadScene(a.scene, parseDefines(a.defines));
+    auto scene = pf::loadScene(a.scene, pf::parseNameValues(a.defines, "-D"));
     const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
-
-    const pf::Properties &fileProps = scene->integratorProperties();
-    const std::string fileType = fileProps.pluginName().empty() ? "path" : fileProps.pluginName();
-    const std::string type = a.integrator.empty() ? fileType : a.integrator;
-    // The file's parameters are checked strictly when they were written for this integrator; when the
-    // CLI picks another one, shared parameters (maxDepth, rrDepth, ...) carry over and the rest is ignored.
-    pf::Properties props = type == fileType ? fileProps : pf::Properties(pf::ObjectKind::Integrator, type, {});
-    if (type != fileType)
-        for (const char *shared : {"maxDepth", "rrDepth", "strictNormals", "hideEmitters"})
-            if (fileProps.has(shared)) props.set(shared, fileProps.type(shared), fileProps.value(shared), fileProps.locationOf(shared));
-    applyParams(props, a.params);
-    auto integrator = pf::createIntegrator(type, props, true);
+    auto integrator = pf::makeIntegrator(*scene, a.integrator, pf::parseNameValues(a.params, "-P"));
 
     pf::RenderOptions opt;
     opt.spp = a.spp;
@@ -100,7 +51,7 @@ int runRender(const RenderArgs &a) {
     image.metadata["pathfarm.sceneLoadSeconds"] = std::to_string(loadSeconds);
     image.metadata["pathfarm.scene"] = a.scene;
 
-    const std::string out = a.output.empty() ? defaultOutput(a.scene) : a.output;
+    const std::string out = a.output.empty() ? pf::client::defaultOutput(a.scene) : a.output;
     std::filesystem::path exr(out), png(out);
     if (exr.extension() != ".exr") exr += ".exr";
     png = exr;
@@ -126,8 +77,8 @@ int main(int argc, char **argv) {
     CLI::App *render = app.add_subcommand("render", "Render a Mitsuba 0.6 scene on this machine");
     render->add_option("scene", r.scene, "Scene file (Mitsuba 0.5/0.6 XML)")->required();
     render->add_option("-o,--output", r.output, "Output EXR (a tonemapped PNG is written beside it)");
-    render->add_option("-i,--integrator", r.integrator, "Integrator (default: the scene's; available: " +
-                                                            pf::integratorNames() + ")");
+    render->add_option("-i,--integrator", r.integrator,
+                       "Integrator (default: the scene's; available: " + pf::integratorNames() + ")");
     render->add_option("--spp", r.spp, "Samples per pixel (default: the scene's sampleCount)")
         ->check(CLI::PositiveNumber);
     render->add_option("--time", r.time, "Wall-time budget in seconds, spent in whole passes")
@@ -137,6 +88,7 @@ int main(int argc, char **argv) {
     render->add_option("-D", r.defines, "Scene parameter: -D name=value sets $name");
     render->add_option("-P,--param", r.params, "Integrator parameter: -P name=value (e.g. -P maxDepth=8)");
     render->add_flag("-q,--quiet", r.quiet, "No progress bar");
+    pf::client::FarmCommands farm(app);
 
     try {
         app.parse(argc, argv);
@@ -146,6 +98,7 @@ int main(int argc, char **argv) {
     }
     try {
         if (*render) return runRender(r);
+        if (const int code = farm.run(); code >= 0) return code;
     } catch (const pf::SceneError &e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return pf::kExitBadInput;

@@ -19,6 +19,7 @@ BUILD_PACKAGES=(
   libsqlite3-dev         # job store
   libxxhash-dev libzstd-dev                            # content hashes, compressed transfers
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc   # farm RPC
+  openssl                # certificates for the farm's TLS test
   libgtest-dev libgmock-dev libbenchmark-dev           # tests and benchmarks
 )
 

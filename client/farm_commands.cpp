@@ -1,0 +1,312 @@
+#include "farm_commands.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "farm/bundle.h"
+#include "farm/convert.h"
+#include "farm/job_setup.h"
+#include "farm/rpc.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "pathfarm/v1/client.grpc.pb.h"
+
+namespace pf::client {
+
+namespace fs = std::filesystem;
+namespace v1 = pathfarm::v1;
+
+namespace {
+
+// A failed call: its status becomes the message and the exit code.
+struct CallError : std::runtime_error {
+    CallError(const std::string &what, const grpc::Status &s)
+        : std::runtime_error(what + ": " + s.error_message()), code(s.error_code()) {}
+    grpc::StatusCode code;
+};
+
+void check(const grpc::Status &s, const std::string &what) {
+    if (!s.ok()) throw CallError(what, s);
+}
+
+std::string progressLine(const v1::Job &j) {
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "job %" PRId64 " %s %5.1f%%: %" PRId64 " spp, %" PRId64 "/%s tasks merged, %" PRId64
+                  " leased, %.1f s",
+                  j.id(), farm::stateName(j.state()).c_str(), 100.0 * j.progress(), j.samples_per_pixel(),
+                  j.tasks().merged(), j.tasks().total() > 0 ? std::to_string(j.tasks().total()).c_str() : "?",
+                  j.tasks().leased(), j.render_seconds());
+    return line;
+}
+
+}  // namespace
+
+struct FarmCommands::Args {
+    std::string master, tokenFile;
+    farm::TlsFiles tls;
+    // submit
+    std::string scene, integrator, output, label;
+    int64_t spp = 0;
+    double time = 0;
+    uint64_t seed = 0;
+    int priority = 0;
+    std::vector<std::string> params, defines;
+    bool wait = false;
+    // the other commands
+    int64_t job = 0;
+    bool all = false;
+
+    CLI::App *submit, *status, *watch, *fetch, *cancel, *workers, *health;
+
+    std::string token() const {
+        if (!tokenFile.empty()) return farm::readToken(tokenFile);
+        if (const char *t = std::getenv("PATHFARM_TOKEN"); t && *t) return t;
+        throw std::runtime_error("no client token: give --token-file or set PATHFARM_TOKEN");
+    }
+    std::unique_ptr<grpc::ClientContext> context(int timeoutSeconds = 60) const {
+        auto ctx = std::make_unique<grpc::ClientContext>();
+        farm::setBearer(*ctx, token());
+        if (timeoutSeconds > 0)
+            ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(timeoutSeconds));
+        return ctx;
+    }
+    std::shared_ptr<grpc::Channel> channel() const { return farm::makeChannel(master, tls, 64 << 20); }
+};
+
+FarmCommands::FarmCommands(CLI::App &app) : a_(std::make_unique<Args>()) {
+    Args &a = *a_;
+    const char *env = std::getenv("PATHFARM_MASTER");
+    a.master = env && *env ? env : "127.0.0.1:7700";
+    auto common = [&](CLI::App *cmd) {
+        cmd->add_option("--master", a.master, "Master address host:port (default: $PATHFARM_MASTER or 127.0.0.1:7700)");
+        cmd->add_option("--token-file", a.tokenFile, "File holding the client token (default: $PATHFARM_TOKEN)");
+        cmd->add_option("--tls-ca", a.tls.ca, "PEM CA: connect with TLS, trusting these roots");
+        cmd->add_option("--tls-cert", a.tls.cert, "PEM client certificate (mTLS)");
+        cmd->add_option("--tls-key", a.tls.key, "PEM private key of --tls-cert");
+        return cmd;
+    };
+    a.submit = common(app.add_subcommand("submit", "Upload a scene and submit a job to the farm"));
+    a.submit->add_option("scene", a.scene, "Scene file (Mitsuba 0.5/0.6 XML)")->required();
+    a.submit->add_option("-i,--integrator", a.integrator, "Integrator (default: the scene's)");
+    a.submit->add_option("--spp", a.spp, "Samples per pixel (default: the scene's sampleCount)")
+        ->check(CLI::PositiveNumber);
+    a.submit->add_option("--time", a.time, "Wall-time budget in seconds, spent in whole tasks")
+        ->check(CLI::PositiveNumber);
+    a.submit->add_option("--seed", a.seed, "Seed of every random stream");
+    a.submit->add_option("-D", a.defines, "Scene parameter: -D name=value sets $name");
+    a.submit->add_option("-P,--param", a.params, "Integrator parameter: -P name=value");
+    a.submit->add_option("--priority", a.priority, "Higher runs first (default 0)");
+    a.submit->add_option("--label", a.label, "Text shown in listings");
+    a.submit->add_flag("--wait", a.wait, "Wait for the job, printing progress, then fetch its image");
+    a.submit->add_option("-o,--output", a.output, "With --wait: output EXR (default: named after the scene)");
+
+    a.status = common(app.add_subcommand("status", "List jobs, or show one"));
+    a.status->add_option("job", a.job, "Job id");
+    a.watch = common(app.add_subcommand("watch", "Follow a job until it ends"));
+    a.watch->add_option("job", a.job, "Job id")->required();
+    a.fetch = common(app.add_subcommand("fetch", "Download a job's image (the running image if unfinished)"));
+    a.fetch->add_option("job", a.job, "Job id")->required();
+    a.fetch->add_option("-o,--output", a.output, "Output EXR")->required();
+    a.cancel = common(app.add_subcommand("cancel", "Cancel a job"));
+    a.cancel->add_option("job", a.job, "Job id")->required();
+    a.workers = common(app.add_subcommand("workers", "List the farm's workers"));
+    a.workers->add_flag("--all", a.all, "Include workers that are gone");
+    a.health = common(app.add_subcommand("health", "Check the master's gRPC health service"));
+}
+
+FarmCommands::~FarmCommands() = default;
+
+namespace {
+
+// Follows a job through WatchJob, printing a line per change; returns the job as it ended.
+v1::Job follow(v1::ClientService::Stub &stub, int64_t id, std::unique_ptr<grpc::ClientContext> ctx) {
+    v1::WatchJobRequest req;
+    req.set_id(id);
+    auto reader = stub.WatchJob(ctx.get(), req);
+    v1::Job job;
+    while (reader->Read(&job)) std::fprintf(stderr, "%s\n", progressLine(job).c_str());
+    check(reader->Finish(), "watching job " + std::to_string(id));
+    return job;
+}
+
+void fetchImage(v1::ClientService::Stub &stub, int64_t id, const std::string &output,
+                std::unique_ptr<grpc::ClientContext> ctx) {
+    v1::FetchImageRequest req;
+    req.set_id(id);
+    auto reader = stub.FetchImage(ctx.get(), req);
+    v1::ImageChunk chunk;
+    v1::ImageInfo info;
+    std::string bytes;
+    while (reader->Read(&chunk)) {
+        if (chunk.has_info()) info = chunk.info();
+        bytes += chunk.data();
+    }
+    check(reader->Finish(), "fetching the image of job " + std::to_string(id));
+    if (bytes.size() != info.size())
+        throw std::runtime_error("the image of job " + std::to_string(id) + " arrived short");
+    const fs::path out(output);
+    if (out.has_parent_path()) fs::create_directories(out.parent_path());
+    std::ofstream(out, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::printf("job %" PRId64 ": %s image, %" PRId64 " spp -> %s\n", id, info.final() ? "final" : "running",
+                info.samples_per_pixel(), output.c_str());
+}
+
+}  // namespace
+
+std::string defaultOutput(const std::string &scenePath) {
+    const fs::path p(scenePath);
+    const std::string stem =
+        p.stem() == "scene" && p.has_parent_path() ? p.parent_path().filename().string() : p.stem().string();
+    return stem + ".exr";
+}
+
+int FarmCommands::run() {
+    const Args &a = *a_;
+    const auto ctx = [&](int timeout = 60) { return a.context(timeout); };
+    try {
+        if (*a.health) {
+            const auto stub = grpc::health::v1::Health::NewStub(a.channel());
+            grpc::ClientContext c;
+            c.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+            grpc::health::v1::HealthCheckResponse reply;
+            check(stub->Check(&c, grpc::health::v1::HealthCheckRequest(), &reply), "health of " + a.master);
+            const bool serving = reply.status() == grpc::health::v1::HealthCheckResponse::SERVING;
+            std::printf("%s: %s\n", a.master.c_str(), serving ? "SERVING" : "NOT_SERVING");
+            return serving ? 0 : 1;
+        }
+        if (!*a.submit && !*a.status && !*a.watch && !*a.fetch && !*a.cancel && !*a.workers) return -1;
+        const auto stub = v1::ClientService::NewStub(a.channel());
+
+        if (*a.submit) {
+            const NameValues defines = parseNameValues(a.defines, "-D"), params = parseNameValues(a.params, "-P");
+            if (!fs::is_regular_file(a.scene)) throw SceneError(a.scene + ": no such scene file");
+            const fs::path scene = fs::absolute(a.scene);
+            const v1::BundleManifest manifest =
+                farm::makeManifest(scene.parent_path().string(), scene.filename().string(),
+                                   farm::collectSceneFiles(scene.string(), defines));
+            const std::string hash = farm::bundleHash(manifest);
+            v1::StatBundleRequest statReq;
+            statReq.set_hash(hash);
+            v1::StatBundleReply stat;
+            check(stub->StatBundle(ctx().get(), statReq, &stat), "contacting " + a.master);
+            if (!stat.present()) {
+                v1::UploadBundleReply reply;
+                const auto c = ctx(3600);
+                auto writer = stub->UploadBundle(c.get(), &reply);
+                farm::streamBundle(scene.parent_path().string(), manifest, 1 << 20,
+                                   [&](const v1::BundleChunk &chunk) { return writer->Write(chunk); });
+                writer->WritesDone();
+                check(writer->Finish(), "uploading " + a.scene);
+                if (reply.hash() != hash) throw std::runtime_error("the master stored the bundle as " + reply.hash());
+                std::fprintf(stderr, "uploaded %d files (%" PRIu64 " bytes) as bundle %s\n", manifest.entries_size(),
+                             reply.bytes(), hash.c_str());
+            }
+            v1::SubmitJobRequest req;
+            v1::JobSpec &spec = *req.mutable_spec();
+            spec.set_bundle_hash(hash);
+            spec.set_integrator(a.integrator);
+            for (const auto &[n, v] : params) {
+                auto *p = spec.add_params();
+                p->set_name(n);
+                p->set_value(v);
+            }
+            for (const auto &[n, v] : defines) {
+                auto *p = spec.add_defines();
+                p->set_name(n);
+                p->set_value(v);
+            }
+            if (a.time > 0) {
+                spec.mutable_budget()->set_time_seconds(a.time);
+            } else if (a.spp > 0) {
+                spec.mutable_budget()->set_spp(a.spp);
+            }
+            spec.set_seed(a.seed);
+            spec.set_priority(a.priority);
+            spec.set_label(a.label.empty() ? scene.filename().string() : a.label);
+            v1::Job job;
+            check(stub->SubmitJob(ctx().get(), req, &job), "submitting " + a.scene);
+            std::printf("job %" PRId64 " submitted: %s, %dx%d, %s\n", job.id(), job.scene_file().c_str(), job.width(),
+                        job.height(), job.integrator().c_str());
+            std::fflush(stdout);
+            if (!a.wait) return 0;
+            const v1::Job last = follow(*stub, job.id(), ctx(0));
+            if (last.state() != v1::JOB_DONE) {
+                std::fprintf(stderr, "error: job %" PRId64 " %s%s%s\n", last.id(),
+                             farm::stateName(last.state()).c_str(), last.error().empty() ? "" : ": ",
+                             last.error().c_str());
+                return 1;
+            }
+            fetchImage(*stub, job.id(), a.output.empty() ? defaultOutput(a.scene) : a.output, ctx(600));
+            return 0;
+        }
+        if (*a.status) {
+            if (a.job > 0) {
+                v1::GetJobRequest req;
+                req.set_id(a.job);
+                v1::Job job;
+                check(stub->GetJob(ctx().get(), req, &job), "job " + std::to_string(a.job));
+                google::protobuf::util::JsonPrintOptions opts;
+                opts.add_whitespace = true;
+                std::string json;
+                (void)google::protobuf::util::MessageToJsonString(job, &json, opts);
+                std::printf("%s", json.c_str());
+                return 0;
+            }
+            v1::ListJobsReply reply;
+            check(stub->ListJobs(ctx().get(), v1::ListJobsRequest(), &reply), "listing jobs");
+            std::printf("%6s  %-9s %6s %8s  %-8s %11s %9s  %s\n", "JOB", "STATE", "DONE", "SPP", "ALGO", "SIZE",
+                        "SECONDS", "LABEL");
+            for (const v1::Job &j : reply.jobs()) {
+                const std::string size = std::to_string(j.width()) + "x" + std::to_string(j.height());
+                std::printf("%6" PRId64 "  %-9s %5.1f%% %8" PRId64 "  %-8s %11s %9.1f  %s\n", j.id(),
+                            farm::stateName(j.state()).c_str(), 100.0 * j.progress(), j.samples_per_pixel(),
+                            j.integrator().c_str(), size.c_str(), j.render_seconds(), j.spec().label().c_str());
+            }
+            return 0;
+        }
+        if (*a.watch) {
+            const v1::Job last = follow(*stub, a.job, ctx(0));
+            return last.state() == v1::JOB_DONE ? 0 : 1;
+        }
+        if (*a.fetch) {
+            fetchImage(*stub, a.job, a.output, ctx(600));
+            return 0;
+        }
+        if (*a.cancel) {
+            v1::CancelJobRequest req;
+            req.set_id(a.job);
+            v1::Job job;
+            check(stub->CancelJob(ctx().get(), req, &job), "cancelling job " + std::to_string(a.job));
+            std::printf("%s\n", progressLine(job).c_str());
+            return 0;
+        }
+        v1::ListWorkersReply reply;
+        check(stub->ListWorkers(ctx().get(), v1::ListWorkersRequest(), &reply), "listing workers");
+        std::printf("%-16s %-9s %7s %6s %12s %7s  %-8s %s\n", "WORKER", "STATE", "THREADS", "TASKS", "SAMPLES/S",
+                    "LEASES", "VERSION", "NAME");
+        for (const v1::WorkerInfo &w : reply.workers()) {
+            if (w.state() == v1::WORKER_LOST && !a.all) continue;
+            std::printf("%-16s %-9s %7d %6" PRId64 " %12.3g %7d  %-8s %s\n", w.id().c_str(),
+                        farm::stateName(w.state()).c_str(), w.threads(), w.tasks_completed(), w.samples_per_second(),
+                        w.attempt_ids_size(), w.version().c_str(), w.name().c_str());
+        }
+        return 0;
+    } catch (const CallError &e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return e.code == grpc::StatusCode::INVALID_ARGUMENT ? kExitBadInput : 1;
+    } catch (const SceneError &e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return kExitBadInput;
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+}
+
+}  // namespace pf::client

@@ -1,0 +1,175 @@
+// The master's state and scheduling, independent of gRPC: jobs and their tasks, leases with deadlines,
+// retries and blocklists, exact in-order merging of results, checkpoints and recovery after a restart.
+// The gRPC services (services.cpp) and the HTTP status module call this class; every public method is
+// thread-safe.
+//
+// Locking: `mu_` guards scheduling state and is only held for short, non-blocking work plus store
+// writes. Each job's film has its own mutex, held while results are merged and checkpoints written;
+// it may be taken before `mu_`, never after.
+#pragma once
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "farm/bundle.h"
+#include "image/bitmap.h"
+#include "image/film.h"
+#include "pathfarm/v1/client.pb.h"
+#include "pathfarm/v1/worker.pb.h"
+#include "store.h"
+
+namespace pf::master {
+
+using Clock = std::chrono::steady_clock;
+using pathfarm::v1::JobSpec;
+
+struct MasterConfig {
+    std::string dataDir = "pathfarm-data";
+    std::chrono::milliseconds leaseTime{10000};           // a lease not renewed for this long is expired
+    std::chrono::milliseconds heartbeat{3000};            // how often workers renew
+    std::chrono::milliseconds checkpointInterval{10000};  // at least; see mergeReady
+    int maxFailuresPerWorker = 3;  // failed or expired attempts of one job before a worker is blocklisted
+    int maxFailuresPerTask = 5;    // failed attempts of one task before its job fails
+    // Per-job limits.
+    int64_t maxPixels = int64_t(16) << 20;
+    int64_t maxSpp = int64_t(1) << 20;
+    double maxTimeSeconds = 7 * 24 * 3600.0;
+    uint64_t maxBundleBytes = uint64_t(2) << 30;
+    int maxMessageBytes = 4 << 20;  // gRPC messages in either direction
+};
+
+// Figures for status pages and /metrics.
+struct MasterMetrics {
+    std::map<std::string, int64_t> tasksByState;  // pending, leased, accepted, merged
+    std::map<std::string, int64_t> jobsByState;
+    int64_t workers = 0, workersAlive = 0;
+    uint64_t samplesMerged = 0;   // since the master started
+    double samplesPerSecond = 0;  // over the last minute
+    int64_t resultsMerged = 0;    // since the master started
+    double mergeSeconds = 0;      // decoding and merging those results
+    uint64_t resultBytes = 0;     // their payloads on the wire
+    int64_t lateResultsIgnored = 0;
+    int64_t attemptsExpired = 0, attemptsFailed = 0;
+};
+
+// Thrown for requests naming a worker the master does not know (the worker registers again).
+struct UnknownWorker : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+class Master {
+public:
+    // Opens (or creates) the data directory and resumes every unfinished job in it.
+    explicit Master(MasterConfig config);
+    ~Master();
+    Master(const Master &) = delete;
+    Master &operator=(const Master &) = delete;
+
+    const MasterConfig &config() const { return cfg_; }
+    farm::BundleStore &bundles() { return bundles_; }
+
+    // ---- clients ----
+    // Validates the spec against the limits, loads the scene from its bundle and builds the integrator
+    // (so that bad scenes and parameters are reported to the submitter, naming file and line), then
+    // queues the job. Throws farm::FarmError or SceneError with a message for the user.
+    pathfarm::v1::Job submit(const JobSpec &spec);
+    std::optional<pathfarm::v1::Job> job(int64_t id) const;
+    std::vector<pathfarm::v1::Job> jobs() const;
+    std::optional<pathfarm::v1::Job> cancel(int64_t id);
+    // A counter that grows whenever any job changes; waitForChange blocks until it exceeds `seen` or
+    // the timeout passes, and returns its value.
+    uint64_t changeCount() const;
+    uint64_t waitForChange(uint64_t seen, std::chrono::milliseconds timeout) const;
+    // The job's image as EXR file content: the final image of a finished job, else the running image.
+    struct ExrImage {
+        std::string bytes;
+        bool final = false;
+        int64_t samplesPerPixel = 0;
+    };
+    std::optional<ExrImage> image(int64_t id) const;
+    // The latest developed image of a job (updated as results merge), or nullptr before the first merge.
+    std::shared_ptr<const Bitmap> preview(int64_t id) const;
+    std::vector<pathfarm::v1::WorkerInfo> workers() const;
+    MasterMetrics metrics() const;
+
+    // ---- workers ----
+    pathfarm::v1::RegisterReply registerWorker(const pathfarm::v1::RegisterRequest &req, const std::string &peer);
+    // A task for this worker, waiting up to `wait` for one; nullopt when there is none (or the worker
+    // drains). Throws UnknownWorker.
+    std::optional<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait);
+    // Renews the worker's leases; returns the attempts it no longer holds. Throws UnknownWorker.
+    std::vector<int64_t> heartbeat(const std::string &worker, const std::vector<int64_t> &attempts, bool draining);
+    // Whether a result for `attempt` would be accepted now; "" if so, else the reason it is not.
+    std::string checkAttempt(const std::string &worker, int64_t attempt) const;
+    // Upper bound of a result payload for `attempt` (decoded size plus zstd's worst case).
+    uint64_t maxPayloadBytes(int64_t attempt) const;
+    // Takes a result: validates and stores it, then merges every result that is next in task order.
+    pathfarm::v1::CompleteReply complete(const std::string &worker, int64_t attempt,
+                                         const pathfarm::v1::TaskStats &stats, const std::string &payload);
+    // Refuses a result that checkAttempt() found stale, recording late results of superseded attempts.
+    pathfarm::v1::CompleteReply ignoreResult(const std::string &worker, int64_t attempt, const std::string &reason);
+    void fail(const std::string &worker, int64_t attempt, const std::string &error);
+
+private:
+    struct JobFilm;
+    struct JobRuntime;
+    struct TaskRuntime;
+    struct WorkerRuntime;
+    struct Lease {
+        int64_t job, task;
+        std::string worker;
+        Clock::time_point deadline;
+    };
+
+    void recover();
+    void recoverJob(const StoredJob &stored);
+    std::shared_ptr<Film> loadFilm(const JobSpec &spec, pathfarm::v1::Job &record) const;
+    void reaperLoop();
+
+    // Under mu_.
+    pathfarm::v1::Job snapshot(const JobRuntime &j) const;
+    std::optional<pathfarm::v1::TaskSpec> pickTask(WorkerRuntime &w);
+    std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
+    bool mayIssue(JobRuntime &j);
+    void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
+                 const std::string &error, int64_t attempt);
+    void countFailure(JobRuntime &j, const std::string &worker, const std::string &why);
+    void setState(JobRuntime &j, pathfarm::v1::JobState state, const std::string &error = "");
+    void touch();
+
+    // Film side: called with the job's film mutex held.
+    void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, ImageBlock>> fresh);
+    void checkpoint(JobRuntime &j);
+    void finishIfComplete(JobRuntime &j);
+    void closeFilm(JobRuntime &j);
+    Bitmap develop(const JobRuntime &j) const;
+    std::string jobDir(int64_t id) const;
+
+    MasterConfig cfg_;
+    farm::BundleStore bundles_;
+    Store store_;
+    mutable std::mutex sceneLoadMu_;  // one scene load at a time bounds the master's memory
+
+    mutable std::mutex mu_;
+    mutable std::condition_variable workChanged_;  // a task may have become available
+    mutable std::condition_variable jobChanged_;
+    uint64_t changes_ = 0;
+    std::map<int64_t, std::unique_ptr<JobRuntime>> jobs_;
+    std::map<int64_t, Lease> leases_;  // by attempt id
+    std::map<std::string, std::unique_ptr<WorkerRuntime>> workers_;
+    MasterMetrics counters_;
+    std::vector<std::pair<Clock::time_point, uint64_t>> recentSamples_;
+
+    bool stopping_ = false;
+    std::thread reaper_;
+};
+
+}  // namespace pf::master

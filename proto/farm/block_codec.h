@@ -1,0 +1,21 @@
+// ImageBlocks on the wire and on disk. A worker's task result and the master's film checkpoints are
+// blocks of doubles that must arrive bit for bit (merging in task order then reproduces the embedded
+// render exactly), so the encoding is lossless: a small header, then the raw arrays byte-shuffled
+// (all first bytes of the doubles, then all second bytes, ...) and compressed with zstd. Shuffling
+// groups the slowly varying sign/exponent bytes, which is what lets zstd shrink doubles at all.
+#pragma once
+#include <string>
+#include <string_view>
+
+#include "image/film.h"
+
+namespace pf::farm {
+
+std::string encodeBlock(const ImageBlock &block, int zstdLevel = 1);
+
+// Decodes into `block`, which must have the layout (offset, size, border) the data was encoded with;
+// throws FarmError naming the problem if it does not, if the data is corrupt, or if any value is not
+// finite (a renderer never produces those, so they mean a broken or hostile sender).
+void decodeBlock(std::string_view data, ImageBlock &block);
+
+}  // namespace pf::farm

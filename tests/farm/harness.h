@@ -1,0 +1,102 @@
+// Real processes on loopback for the farm tests: a master and workers started from their binaries with
+// their own token files and data directories, killed with real signals, and a gRPC client to talk to
+// the master the way the CLI does.
+#pragma once
+#include <sys/types.h>
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "farm/rpc.h"
+#include "pathfarm/v1/client.grpc.pb.h"
+#include "pathfarm/v1/worker.grpc.pb.h"
+
+namespace pf::test::farm {
+
+// A child process whose output goes to a log file. The destructor kills (SIGKILL) and reaps it.
+class Process {
+public:
+    Process(const std::vector<std::string> &argv, const std::string &logFile);
+    ~Process();
+    Process(const Process &) = delete;
+    Process &operator=(const Process &) = delete;
+
+    pid_t pid() const { return pid_; }
+    void signal(int sig) const;
+    // The exit code once the process ended within `timeout`; -signal if a signal ended it.
+    std::optional<int> wait(std::chrono::milliseconds timeout);
+    bool running();
+    std::string log() const;
+
+private:
+    pid_t pid_ = -1;
+    std::optional<int> status_;
+    std::string logFile_;
+};
+
+// Writes the farm tests' scene into `dir`: scene.xml, which includes parts/light.xml and loads
+// meshes/floor.obj (so that bundles carry more than one file), with $res pixels square and `spp`
+// samples per pixel by default. Returns the scene's path.
+std::string writeTestScene(const std::string &dir, int res, int spp);
+
+// The job id in the output of `pathfarm submit`, or -1.
+int64_t jobIdFrom(const std::string &submitOutput);
+
+// Pixels of two images are the same bits.
+bool sameBits(const std::string &exrA, const std::string &exrB);
+
+// Polls `done` every 20 ms until it holds or `timeout` passes.
+bool waitUntil(const std::function<bool()> &done, std::chrono::milliseconds timeout);
+
+// A port on 127.0.0.1 that was free a moment ago.
+int freePort();
+
+// One farm: a directory with token files, a master address, and the processes of the test.
+class Farm {
+public:
+    explicit Farm(const std::string &name);
+    const std::string &dir() const { return dir_; }
+    std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+    const std::string &clientToken() const { return clientToken_; }
+    const std::string &workerToken() const { return workerToken_; }
+    std::string clientTokenFile() const { return dir_ + "/client.token"; }
+    std::string workerTokenFile() const { return dir_ + "/worker.token"; }
+    std::string storePath() const { return dir_ + "/data/store.sqlite"; }
+
+    // TLS files the test's own stubs use from now on (the processes get theirs as arguments).
+    void useTls(const pf::farm::TlsFiles &tls) { tls_ = tls; }
+
+    // Starts the master on this farm's port and data directory and waits until it serves.
+    Process &startMaster(const std::vector<std::string> &extraArgs = {});
+    Process &startWorker(int threads, const std::vector<std::string> &extraArgs = {});
+    Process &master() { return *master_; }
+    void killMaster();
+
+    // A stub of the client service, and a context carrying `token` (default: the client token).
+    std::unique_ptr<pathfarm::v1::ClientService::Stub> clientStub(int maxMessageBytes = 4 << 20) const;
+    std::unique_ptr<pathfarm::v1::WorkerService::Stub> workerStub(int maxMessageBytes = 4 << 20) const;
+    std::unique_ptr<grpc::ClientContext> context(const std::string &token, int timeoutSeconds = 30) const;
+
+    // The `pathfarm` CLI with PATHFARM_MASTER and PATHFARM_TOKEN set for this farm: output and exit code.
+    std::pair<int, std::string> cli(const std::string &args) const;
+    // Waits until the job is done (or failed/cancelled) and returns it; fails the test on timeout.
+    pathfarm::v1::Job waitForJob(int64_t id, std::chrono::seconds timeout) const;
+
+    // One SQL query on the master's store, returning the first column of the first row.
+    int64_t queryStore(const std::string &sql) const;
+
+private:
+    std::string dir_;
+    int port_;
+    std::string clientToken_, workerToken_;
+    pf::farm::TlsFiles tls_;
+    std::unique_ptr<Process> master_;
+    std::vector<std::unique_ptr<Process>> workers_;
+    int masterStarts_ = 0;
+};
+
+}  // namespace pf::test::farm

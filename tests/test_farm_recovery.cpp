@@ -1,0 +1,151 @@
+// The master's failure rules with real processes: a master killed (SIGKILL) in the middle of a job
+// resumes it from its store with nothing lost and nothing merged twice, and a result that arrives after
+// its task was given to another attempt is ignored.
+#include <gtest/gtest.h>
+
+#include "farm/block_codec.h"
+#include "farm/harness.h"
+#include "farm/hash.h"
+#include "image/bitmap.h"
+#include "integrators/integrator.h"
+#include "render/image_task.h"
+#include "scene/scene.h"
+#include "support/render_util.h"
+
+namespace pf::test::farm {
+namespace {
+
+namespace v1 = pathfarm::v1;
+using namespace std::chrono_literals;
+
+TEST(FarmRecovery, KilledMasterResumesTheJobWithTheSameImage) {
+    Farm farm("master-restart");
+    const std::string scene = writeTestScene(farm.dir() + "/scene", 128, 8);
+    const std::string spec = "--spp 160 --seed 21";
+    const std::string ref = farm.dir() + "/reference.exr";
+    ASSERT_EQ(farm.cli("render " + scene + " -q " + spec + " -o " + ref).first, 0);
+
+    const std::vector<std::string> args = {"--lease-ms", "3000", "--heartbeat-ms", "250", "--checkpoint-ms", "200"};
+    farm.startMaster(args);
+    farm.startWorker(1);
+    farm.startWorker(1);
+    const auto [code, output] = farm.cli("submit " + scene + " " + spec);
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    const std::string job = std::to_string(id);
+    // Killed once some results are in a checkpoint and the rest are still to come.
+    ASSERT_TRUE(
+        waitUntil([&] { return farm.queryStore("SELECT COUNT(*) FROM merges WHERE job_id = " + job) >= 2; }, 120s));
+    farm.killMaster();
+    const int64_t mergedBefore = farm.queryStore("SELECT COUNT(*) FROM merges WHERE job_id = " + job);
+    ASSERT_LT(mergedBefore, 20) << "the job finished before the master was killed; make its tasks longer";
+
+    farm.startMaster(args);
+    EXPECT_NE(farm.master().log().find("resumed"), std::string::npos) << farm.master().log();
+    const v1::Job done = farm.waitForJob(id, 180s);
+    ASSERT_EQ(done.state(), v1::JOB_DONE) << done.DebugString() << farm.master().log();
+    const auto [fcode, fetched] = farm.cli("fetch " + job + " -o " + farm.dir() + "/farm.exr");
+    ASSERT_EQ(fcode, 0) << fetched;
+    EXPECT_TRUE(sameBits(ref, farm.dir() + "/farm.exr"));
+    // Every task merged exactly once, across both lives of the master.
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*) FROM merges WHERE job_id = " + job), 20);
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(DISTINCT task_idx) FROM merges WHERE job_id = " + job), 20);
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*) FROM (SELECT task_idx FROM merges WHERE job_id = " + job +
+                              " GROUP BY task_idx HAVING COUNT(*) > 1)"),
+              0);
+}
+
+// Drives the worker protocol by hand: two workers, one of which goes silent and delivers late.
+class FakeWorker {
+public:
+    FakeWorker(const Farm &farm) : farm_(farm), stub_(farm.workerStub(64 << 20)) {
+        v1::RegisterRequest req;
+        req.set_name("fake");
+        v1::RegisterReply reply;
+        EXPECT_TRUE(stub_->Register(ctx().get(), req, &reply).ok());
+        id_ = reply.worker_id();
+    }
+    std::optional<v1::TaskSpec> lease() {
+        v1::LeaseRequest req;
+        req.set_worker_id(id_);
+        req.set_wait_ms(5000);
+        v1::LeaseReply reply;
+        EXPECT_TRUE(stub_->LeaseTask(ctx().get(), req, &reply).ok());
+        return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
+    }
+    v1::CompleteReply complete(int64_t attempt, const std::string &payload) {
+        v1::CompleteReply reply;
+        const auto c = ctx();
+        auto writer = stub_->CompleteTask(c.get(), &reply);
+        v1::ResultChunk chunk;
+        chunk.mutable_header()->set_worker_id(id_);
+        chunk.mutable_header()->set_attempt_id(attempt);
+        chunk.mutable_header()->set_payload_size(payload.size());
+        chunk.mutable_header()->set_payload_hash(pf::farm::hashHex64(payload));
+        if (writer->Write(chunk)) {
+            chunk.set_data(payload);
+            writer->Write(chunk);
+            writer->WritesDone();
+        }
+        EXPECT_TRUE(writer->Finish().ok());
+        return reply;
+    }
+
+private:
+    std::unique_ptr<grpc::ClientContext> ctx() const { return farm_.context(farm_.workerToken()); }
+    const Farm &farm_;
+    std::unique_ptr<v1::WorkerService::Stub> stub_;
+    std::string id_;
+};
+
+TEST(FarmRecovery, LateResultOfASupersededAttemptIsIgnored) {
+    Farm farm("late-result");
+    const std::string scene = writeTestScene(farm.dir() + "/scene", 24, 8);
+    const std::string ref = farm.dir() + "/reference.exr";
+    ASSERT_EQ(farm.cli("render " + scene + " -q --spp 8 --seed 2 -o " + ref).first, 0);
+    farm.startMaster({"--lease-ms", "500", "--heartbeat-ms", "100"});
+    const auto [code, output] = farm.cli("submit " + scene + " --spp 8 --seed 2");
+    ASSERT_EQ(code, 0) << output;
+    const std::string job = std::to_string(jobIdFrom(output));
+
+    // The task's result, rendered here exactly as a worker renders it.
+    auto loaded = loadScene(scene);
+    const auto integrator = createIntegrator("path", loaded->integratorProperties(), true);
+    const ImageTaskResult result =
+        runImageTask(*loaded, dynamic_cast<const SamplingIntegrator &>(*integrator), 2, ImageTask{0, 8}, 1);
+    const std::string payload = pf::farm::encodeBlock(result.block);
+
+    FakeWorker slow(farm), fast(farm);
+    const auto first = slow.lease();
+    ASSERT_TRUE(first);
+    // `slow` never renews its lease: the master expires it and gives the task to `fast`.
+    ASSERT_TRUE(waitUntil(
+        [&] {
+            return farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'expired' AND id = " +
+                                   std::to_string(first->attempt_id())) == 1;
+        },
+        30s));
+    const auto second = fast.lease();
+    ASSERT_TRUE(second);
+    EXPECT_EQ(second->task_index(), first->task_index());
+    EXPECT_NE(second->attempt_id(), first->attempt_id());
+    EXPECT_TRUE(fast.complete(second->attempt_id(), payload).accepted());
+
+    const v1::CompleteReply late = slow.complete(first->attempt_id(), payload);
+    EXPECT_FALSE(late.accepted());
+    EXPECT_NE(late.reason().find("superseded"), std::string::npos) << late.reason();
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'ignored' AND id = " +
+                              std::to_string(first->attempt_id())),
+              1);
+
+    const v1::Job done = farm.waitForJob(std::stoll(job), 30s);
+    ASSERT_EQ(done.state(), v1::JOB_DONE) << done.DebugString();
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*) FROM merges WHERE job_id = " + job), 1);
+    const auto [fcode, fetched] = farm.cli("fetch " + job + " -o " + farm.dir() + "/farm.exr");
+    ASSERT_EQ(fcode, 0) << fetched;
+    EXPECT_TRUE(sameBits(ref, farm.dir() + "/farm.exr"));
+    EXPECT_TRUE(farm.master().running());
+}
+
+}  // namespace
+}  // namespace pf::test::farm

@@ -1,0 +1,152 @@
+// The farm's wire layer in-process: film blocks survive encoding bit for bit and corrupt ones are
+// refused; bundles collect what a scene references, refuse entries that leave the bundle, and are only
+// stored when every byte matches the manifest.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <random>
+
+#include "farm/block_codec.h"
+#include "farm/bundle.h"
+#include "farm/error.h"
+#include "farm/harness.h"
+#include "farm/hash.h"
+#include "farm/rpc.h"
+#include "image/rfilter.h"
+#include "support/render_util.h"
+
+namespace pf::test::farm {
+namespace {
+
+namespace fs = std::filesystem;
+using pf::farm::FarmError;
+
+ImageBlock randomBlock(const ReconstructionFilter &filter, uint32_t seed) {
+    ImageBlock b(0, 0, 37, 23, &filter);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 2000; ++i) {
+        const Vec2 p(u(rng) * 37, u(rng) * 23);
+        b.put(p, Spectrum(u(rng), u(rng) * 1e-7, u(rng) * 1e9));
+        if (i % 3 == 0) b.splat(p, Spectrum(u(rng), 0, 1));
+    }
+    b.put(Vec2(1, 1), Spectrum(std::nan(""), 0, 0));  // counted as invalid, which must travel too
+    return b;
+}
+
+bool sameStorage(const ImageBlock &a, const ImageBlock &b) {
+    auto same = [](std::span<const double> x, std::span<const double> y) {
+        return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+    };
+    return same(a.sumData(), b.sumData()) && same(a.weightData(), b.weightData()) &&
+           same(a.splatData(), b.splatData()) && a.invalidSamples() == b.invalidSamples();
+}
+
+TEST(FarmWire, BlocksRoundTripBitForBit) {
+    const GaussianFilter filter;
+    const ImageBlock original = randomBlock(filter, 1);
+    const std::string data = pf::farm::encodeBlock(original);
+    ImageBlock decoded(0, 0, 37, 23, &filter);
+    pf::farm::decodeBlock(data, decoded);
+    EXPECT_TRUE(sameStorage(original, decoded));
+    EXPECT_EQ(decoded.invalidSamples(), 1u);
+    // Byte shuffling is what makes doubles compressible at all.
+    EXPECT_LT(data.size(), 7 * sizeof(double) * original.weightData().size());
+}
+
+TEST(FarmWire, CorruptOrMismatchedBlocksAreRefused) {
+    const GaussianFilter gaussian;
+    const BoxFilter box;
+    const std::string data = pf::farm::encodeBlock(randomBlock(gaussian, 2));
+    ImageBlock wrongSize(0, 0, 36, 23, &gaussian), wrongBorder(0, 0, 37, 23, &box), right(0, 0, 37, 23, &gaussian);
+    EXPECT_THROW(pf::farm::decodeBlock(data, wrongSize), FarmError);
+    EXPECT_THROW(pf::farm::decodeBlock(data, wrongBorder), FarmError);
+    EXPECT_THROW(pf::farm::decodeBlock(data.substr(0, data.size() / 2), right), FarmError);
+    EXPECT_THROW(pf::farm::decodeBlock(data.substr(0, 10), right), FarmError);
+    std::string flipped = data;
+    flipped[flipped.size() / 2] ^= 0x5a;
+    EXPECT_THROW(pf::farm::decodeBlock(flipped, right), FarmError);
+    ImageBlock infinite(0, 0, 37, 23, &gaussian);
+    infinite.sumData()[5] = INFINITY;
+    EXPECT_THROW(pf::farm::decodeBlock(pf::farm::encodeBlock(infinite), right), FarmError);
+}
+
+TEST(FarmWire, SceneFilesAreCollectedThroughIncludesAndDefines) {
+    const std::string dir = tempDir("farm-wire-collect");
+    const std::string scene = writeTestScene(dir, 8, 1);
+    writeFile(dir, "unused.obj", "v 0 0 0\n");
+    writeFile(dir, "meshes/alt.obj", "v 0 0 0\n");
+    writeFile(fs::path(dir).parent_path().string(), "outside.obj", "v 0 0 0\n");
+    const std::string withDefine = writeFile(dir, "defined.xml", R"(<scene version="0.6.0">
+  <default name="mesh" value="floor"/>
+  <shape type="obj"><string name="filename" value="meshes/$mesh.obj"/></shape>
+  <shape type="obj"><string name="filename" value="../outside.obj"/></shape>
+  <include filename="parts/light.xml"/>
+</scene>
+)");
+    EXPECT_EQ(pf::farm::collectSceneFiles(scene, {}),
+              (std::vector<std::string>{"scene.xml", "parts/light.xml", "meshes/floor.obj"}));
+    EXPECT_EQ(pf::farm::collectSceneFiles(withDefine, {}),
+              (std::vector<std::string>{"defined.xml", "meshes/floor.obj", "parts/light.xml"}));
+    EXPECT_EQ(pf::farm::collectSceneFiles(withDefine, {{"mesh", "alt"}}),
+              (std::vector<std::string>{"defined.xml", "meshes/alt.obj", "parts/light.xml"}));
+}
+
+TEST(FarmWire, ManifestsRefuseEntriesOutsideTheBundle) {
+    auto manifest = [](const std::vector<std::string> &paths) {
+        pathfarm::v1::BundleManifest m;
+        m.set_scene_file(paths.front());
+        for (const std::string &p : paths) {
+            auto *e = m.add_entries();
+            e->set_path(p);
+            e->set_size(1);
+            e->set_hash(pf::farm::hashHex64("x"));
+        }
+        return m;
+    };
+    EXPECT_NO_THROW(pf::farm::validateManifest(manifest({"scene.xml", "meshes/a.obj", "a..b/c"}), 100));
+    for (const char *bad : {"../a", "/abs", "a/../../b", "a/./b", "a//b", "a\\b", "C:/x", "", "a/"})
+        EXPECT_THROW(pf::farm::validateManifest(manifest({"scene.xml", bad}), 100), FarmError) << bad;
+    EXPECT_THROW(pf::farm::validateManifest(manifest({"scene.xml", "scene.xml"}), 100), FarmError);
+    EXPECT_THROW(pf::farm::validateManifest(manifest({"scene.xml", "b"}), 1), FarmError);
+    auto noScene = manifest({"scene.xml"});
+    noScene.set_scene_file("other.xml");
+    EXPECT_THROW(pf::farm::validateManifest(noScene, 100), FarmError);
+}
+
+TEST(FarmWire, BundlesAreStoredOnlyWhenComplete) {
+    const std::string src = tempDir("farm-wire-src");
+    const std::string scene = writeTestScene(src, 8, 1);
+    const auto manifest = pf::farm::makeManifest(src, "scene.xml", pf::farm::collectSceneFiles(scene, {}));
+    std::vector<pathfarm::v1::BundleChunk> chunks;
+    pf::farm::streamBundle(src, manifest, 64, [&](const pathfarm::v1::BundleChunk &c) {
+        chunks.push_back(c);
+        return true;
+    });
+    EXPECT_GT(chunks.size(), 3u);  // small chunks cross file boundaries
+
+    pf::farm::BundleStore store(tempDir("farm-wire-store"), 1 << 20);
+    auto replay = [&](std::vector<pathfarm::v1::BundleChunk> list) {
+        size_t i = 0;
+        return store.receive([&](pathfarm::v1::BundleChunk &c) {
+            if (i == list.size()) return false;
+            c = list[i++];
+            return true;
+        });
+    };
+    auto corrupted = chunks;
+    corrupted.back().mutable_data()->back() ^= 1;
+    EXPECT_THROW(replay(corrupted), FarmError);
+    EXPECT_FALSE(store.has(pf::farm::bundleHash(manifest)));
+    const std::string hash = replay(chunks);
+    EXPECT_EQ(hash, pf::farm::bundleHash(manifest));
+    ASSERT_TRUE(store.has(hash));
+    EXPECT_EQ(pf::farm::readFile(store.dir(hash) + "/meshes/floor.obj"), pf::farm::readFile(src + "/meshes/floor.obj"));
+    EXPECT_FALSE(store.has("../" + hash));
+    EXPECT_THROW(store.dir("../etc"), FarmError);
+}
+
+}  // namespace
+}  // namespace pf::test::farm

@@ -1,0 +1,390 @@
+#include "worker.h"
+
+#include <sched.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "farm/block_codec.h"
+#include "farm/convert.h"
+#include "farm/hash.h"
+#include "farm/job_setup.h"
+
+namespace pf::worker {
+
+namespace fs = std::filesystem;
+namespace v1 = pathfarm::v1;
+
+namespace {
+
+// ceil(quota / period) from a cgroup v2 cpu.max ("max 100000" or "200000 100000") or the v1 pair of
+// files; 0 when there is no quota.
+int cgroupQuota() {
+    std::string path = "/";
+    {
+        std::ifstream self("/proc/self/cgroup");
+        for (std::string line; std::getline(self, line);)
+            if (line.rfind("0::", 0) == 0) path = line.substr(3);
+    }
+    for (const std::string &dir : {"/sys/fs/cgroup" + path, std::string("/sys/fs/cgroup")}) {
+        std::ifstream in(dir + "/cpu.max");
+        std::string quota;
+        double period = 0;
+        if (in >> quota >> period && quota != "max" && period > 0)
+            return static_cast<int>(std::ceil(std::stod(quota) / period));
+        if (in) return 0;
+    }
+    std::ifstream q("/sys/fs/cgroup/cpu/cpu.cfs_quota_us"), p("/sys/fs/cgroup/cpu/cpu.cfs_period_us");
+    double quota = -1, period = 0;
+    if (q >> quota && p >> period && quota > 0 && period > 0) return static_cast<int>(std::ceil(quota / period));
+    return 0;
+}
+
+bool retryable(const grpc::Status &s) {
+    return s.error_code() == grpc::StatusCode::UNAVAILABLE || s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED ||
+           s.error_code() == grpc::StatusCode::CANCELLED;
+}
+
+}  // namespace
+
+int availableCores() {
+    cpu_set_t set;
+    int cores = sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 0;
+    if (cores <= 0) cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const int quota = cgroupQuota();
+    return quota > 0 ? std::max(1, std::min(cores, quota)) : cores;
+}
+
+Worker::Worker(WorkerConfig config)
+    : cfg_(std::move(config)),
+      channel_(farm::makeChannel(cfg_.master, cfg_.tls, cfg_.maxMessageBytes)),
+      stub_(v1::WorkerService::NewStub(channel_)),
+      cache_(cfg_.cacheDir, std::numeric_limits<uint64_t>::max()) {}
+
+Worker::~Worker() {
+    stopping_ = true;
+    changed_.notify_all();
+    if (heartbeatThread_.joinable()) heartbeatThread_.join();
+    if (uploadThread_.joinable()) uploadThread_.join();
+}
+
+std::unique_ptr<grpc::ClientContext> Worker::context(std::chrono::milliseconds timeout) const {
+    auto ctx = std::make_unique<grpc::ClientContext>();
+    farm::setBearer(*ctx, cfg_.token);
+    ctx->set_deadline(std::chrono::system_clock::now() + timeout);
+    return ctx;
+}
+
+std::string Worker::workerId() const {
+    const std::lock_guard<std::mutex> lock(mu_);
+    return workerId_;
+}
+
+bool Worker::backoff(int &step) const {
+    static thread_local std::mt19937 rng(std::random_device{}());
+    const int ms = std::min(5000, 200 << std::min(step, 5));
+    ++step;
+    const auto until = std::chrono::steady_clock::now() +
+                       std::chrono::milliseconds(std::uniform_int_distribution<int>(ms / 2, ms)(rng));
+    // Sleeps in short steps so that a stop is noticed.
+    while (std::chrono::steady_clock::now() < until && !stopping_)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return !stopping_;
+}
+
+void Worker::registerWithMaster() {
+    v1::RegisterRequest req;
+    req.set_worker_id(workerId());
+    req.set_name(cfg_.name);
+    req.set_version(farm::kVersion);
+    req.set_cores(availableCores());
+    req.set_threads(cfg_.threads);
+    std::stringstream names(integratorNames());
+    for (std::string n; std::getline(names >> std::ws, n, ',');) req.add_algorithms(n);
+    for (int step = 0;;) {
+        v1::RegisterReply reply;
+        const grpc::Status s = stub_->Register(context(std::chrono::seconds(10)).get(), req, &reply);
+        if (s.ok()) {
+            const std::lock_guard<std::mutex> lock(mu_);
+            workerId_ = reply.worker_id();
+            heartbeat_ = std::chrono::milliseconds(std::max<int64_t>(20, reply.heartbeat_ms()));
+            cfg_.maxMessageBytes = static_cast<int>(std::min<uint64_t>(reply.max_message_bytes(), 1 << 30));
+            spdlog::info("worker={}: registered with {}, {} threads, heartbeat {} ms", workerId_, cfg_.master,
+                         cfg_.threads, heartbeat_.count());
+            return;
+        }
+        if (!retryable(s)) throw std::runtime_error("registration refused: " + s.error_message());
+        spdlog::warn("master {} unavailable ({}); retrying", cfg_.master, s.error_message());
+        if (!backoff(step)) return;
+    }
+}
+
+void Worker::hold(int64_t attempt) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    held_.insert(attempt);
+}
+
+void Worker::release(int64_t attempt) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    held_.erase(attempt);
+    lost_.erase(attempt);
+}
+
+bool Worker::isLost(int64_t attempt) const {
+    const std::lock_guard<std::mutex> lock(mu_);
+    return lost_.count(attempt) != 0;
+}
+
+void Worker::drain() {
+    draining_ = true;
+    const std::lock_guard<std::mutex> lock(mu_);
+    if (leaseCall_) leaseCall_->TryCancel();
+    changed_.notify_all();
+}
+
+int Worker::run() {
+    registerWithMaster();
+    heartbeatThread_ = std::thread([this] { heartbeatLoop(); });
+    uploadThread_ = std::thread([this] { uploadLoop(); });
+    while (!draining_ && !stopping_) {
+        if (const auto task = leaseTask()) work(*task);
+    }
+    spdlog::info("worker={}: draining: finishing the uploads in progress", workerId());
+    {
+        std::unique_lock<std::mutex> lock(mu_);
+        changed_.wait(lock, [&] { return (uploads_.empty() && !uploading_) || stopping_; });
+    }
+    stopping_ = true;
+    changed_.notify_all();
+    heartbeatThread_.join();
+    uploadThread_.join();
+    spdlog::info("worker={}: drained", workerId());
+    return 0;
+}
+
+std::optional<v1::TaskSpec> Worker::leaseTask() {
+    for (int step = 0; !draining_;) {
+        v1::LeaseRequest req;
+        req.set_worker_id(workerId());
+        req.set_wait_ms(2000);
+        v1::LeaseReply reply;
+        const auto ctx = context(std::chrono::seconds(30));
+        {
+            const std::lock_guard<std::mutex> lock(mu_);
+            leaseCall_ = ctx.get();
+        }
+        spdlog::debug("worker={}: LeaseTask", req.worker_id());
+        const grpc::Status s = stub_->LeaseTask(ctx.get(), req, &reply);
+        {
+            const std::lock_guard<std::mutex> lock(mu_);
+            leaseCall_ = nullptr;
+        }
+        if (s.ok()) return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
+        if (draining_) return std::nullopt;
+        if (s.error_code() == grpc::StatusCode::NOT_FOUND) {
+            registerWithMaster();  // the master forgot this worker (a new store)
+        } else if (!retryable(s)) {
+            throw std::runtime_error("lease refused: " + s.error_message());
+        } else {
+            spdlog::warn("worker={}: master unavailable ({}); retrying", workerId(), s.error_message());
+            if (!backoff(step)) return std::nullopt;
+        }
+    }
+    return std::nullopt;
+}
+
+void Worker::work(const v1::TaskSpec &task) {
+    const int64_t attempt = task.attempt_id();
+    hold(attempt);
+    spdlog::info("job={} task={} attempt={} worker={}: rendering samples [{}, {})", task.job_id(), task.task_index(),
+                 attempt, workerId(), task.image().first_sample(),
+                 task.image().first_sample() + task.image().sample_count());
+    if (cfg_.failEveryTask) {
+        failTask(attempt, "injected fault (--fail-every-task)");
+        return;
+    }
+    std::optional<ImageTaskResult> result;
+    double loadSeconds = 0;
+    try {
+        if (!task.has_image()) throw std::runtime_error("this worker cannot run the task kind it was given");
+        const auto t0 = std::chrono::steady_clock::now();
+        const Prepared &p = prepare(task);
+        loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const auto *integrator = dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
+        if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
+        result.emplace(runImageTask(*p.scene, *integrator, task.job().seed(),
+                                    ImageTask{task.image().first_sample(), task.image().sample_count()}, cfg_.threads));
+    } catch (const std::exception &e) {
+        failTask(attempt, e.what());
+        return;
+    }
+    if (isLost(attempt)) {
+        spdlog::warn("job={} task={} attempt={}: lease lost while rendering; result dropped", task.job_id(),
+                     task.task_index(), attempt);
+        release(attempt);
+        return;
+    }
+    // One result waits while the previous one uploads; rendering the next task overlaps the upload.
+    std::unique_lock<std::mutex> lock(mu_);
+    changed_.wait(lock, [&] { return uploads_.empty() || stopping_; });
+    uploads_.push_back(Result{attempt, std::move(*result), loadSeconds});
+    changed_.notify_all();
+}
+
+const Worker::Prepared &Worker::prepare(const v1::TaskSpec &task) {
+    // Everything that shapes the scene or the integrator, and nothing else, forms the cache key.
+    v1::JobSpec keySpec;
+    keySpec.set_bundle_hash(task.job().bundle_hash());
+    keySpec.set_integrator(task.job().integrator());
+    *keySpec.mutable_params() = task.job().params();
+    *keySpec.mutable_defines() = task.job().defines();
+    const std::string key = keySpec.SerializeAsString() + task.scene_file();
+    if (prepared_ && prepared_->key == key) return *prepared_;
+    prepared_.reset();
+    if (!cache_.has(task.job().bundle_hash())) fetchBundle(task.job().bundle_hash());
+    const v1::BundleManifest manifest = cache_.manifest(task.job().bundle_hash());
+    if (manifest.scene_file() != task.scene_file())
+        throw std::runtime_error("bundle " + task.job().bundle_hash() + " has no scene '" + task.scene_file() + "'");
+    const auto t0 = std::chrono::steady_clock::now();
+    Prepared p{key,
+               loadScene((fs::path(cache_.dir(task.job().bundle_hash())) / task.scene_file()).string(),
+                         farm::toNameValues(task.job().defines())),
+               nullptr};
+    p.integrator = makeIntegrator(*p.scene, task.job().integrator(), farm::toNameValues(task.job().params()));
+    spdlog::info("job={}: scene {} loaded in {:.2f} s", task.job_id(), task.scene_file(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    prepared_ = std::move(p);
+    return *prepared_;
+}
+
+void Worker::fetchBundle(const std::string &hash) {
+    for (int step = 0;;) {
+        v1::FetchBundleRequest req;
+        req.set_hash(hash);
+        const auto ctx = context(std::chrono::minutes(30));
+        auto reader = stub_->FetchBundle(ctx.get(), req);
+        try {
+            cache_.receive([&](v1::BundleChunk &c) { return reader->Read(&c); }, hash);
+        } catch (const std::exception &e) {
+            ctx->TryCancel();
+            reader->Finish();
+            throw std::runtime_error(std::string("bundle ") + hash + ": " + e.what());
+        }
+        const grpc::Status s = reader->Finish();
+        if (s.ok()) {
+            spdlog::info("bundle {}: cached", hash);
+            return;
+        }
+        if (!retryable(s) || !backoff(step)) throw std::runtime_error("bundle " + hash + ": " + s.error_message());
+    }
+}
+
+void Worker::failTask(int64_t attempt, const std::string &error) {
+    spdlog::warn("attempt={} worker={}: failed: {}", attempt, workerId(), error);
+    for (int step = 0;;) {
+        v1::FailTaskRequest req;
+        req.set_worker_id(workerId());
+        req.set_attempt_id(attempt);
+        req.set_error(error);
+        v1::FailTaskReply reply;
+        const grpc::Status s = stub_->FailTask(context(std::chrono::seconds(10)).get(), req, &reply);
+        if (s.ok() || !retryable(s) || isLost(attempt) || !backoff(step)) break;
+    }
+    release(attempt);
+}
+
+void Worker::upload(const Result &r) {
+    const std::string payload = farm::encodeBlock(r.result.block);
+    const std::string hash = farm::hashHex64(payload);
+    const size_t chunk = static_cast<size_t>(std::max(4096, cfg_.maxMessageBytes - 4096));
+    for (int step = 0; !isLost(r.attempt);) {
+        v1::CompleteReply reply;
+        const auto ctx = context(std::chrono::minutes(10));
+        auto writer = stub_->CompleteTask(ctx.get(), &reply);
+        v1::ResultChunk c;
+        auto *h = c.mutable_header();
+        h->set_worker_id(workerId());
+        h->set_attempt_id(r.attempt);
+        h->mutable_stats()->set_samples(r.result.samples);
+        h->mutable_stats()->set_rays(r.result.rays);
+        h->mutable_stats()->set_seconds(r.result.seconds);
+        h->mutable_stats()->set_scene_load_seconds(r.loadSeconds);
+        h->set_payload_size(payload.size());
+        h->set_payload_hash(hash);
+        // A refused stream stops accepting writes; Finish() then says why.
+        bool open = writer->Write(c);
+        for (size_t off = 0; open && off < payload.size(); off += chunk) {
+            c.set_data(payload.substr(off, chunk));
+            open = writer->Write(c);
+        }
+        if (open) writer->WritesDone();
+        const grpc::Status s = writer->Finish();
+        if (s.ok()) {
+            if (reply.accepted()) {
+                spdlog::info("attempt={} worker={}: result accepted ({} bytes, {:.2f} s)", r.attempt, workerId(),
+                             payload.size(), r.result.seconds);
+            } else {
+                spdlog::warn("attempt={} worker={}: result ignored: {}", r.attempt, workerId(), reply.reason());
+            }
+            return;
+        }
+        if (!retryable(s)) {
+            spdlog::error("attempt={} worker={}: result refused: {}", r.attempt, workerId(), s.error_message());
+            return;
+        }
+        spdlog::warn("attempt={}: master unavailable ({}); retrying the upload", r.attempt, s.error_message());
+        if (!backoff(step)) return;
+    }
+    spdlog::warn("attempt={}: lease lost before the result was delivered", r.attempt);
+}
+
+void Worker::uploadLoop() {
+    for (;;) {
+        std::unique_lock<std::mutex> lock(mu_);
+        changed_.wait(lock, [&] { return !uploads_.empty() || stopping_; });
+        if (uploads_.empty()) return;
+        uploading_ = true;
+        Result r = std::move(uploads_.front());
+        uploads_.pop_front();
+        changed_.notify_all();
+        lock.unlock();
+        upload(r);
+        release(r.attempt);
+        lock.lock();
+        uploading_ = false;
+        changed_.notify_all();
+    }
+}
+
+void Worker::heartbeatLoop() {
+    for (;;) {
+        std::chrono::milliseconds period;
+        v1::HeartbeatRequest req;
+        {
+            std::unique_lock<std::mutex> lock(mu_);
+            period = heartbeat_;
+            if (changed_.wait_for(lock, period, [&] { return stopping_.load(); })) return;
+            req.set_worker_id(workerId_);
+            for (const int64_t a : held_) req.add_attempt_ids(a);
+        }
+        req.set_draining(draining_);
+        v1::HeartbeatReply reply;
+        const grpc::Status s = stub_->Heartbeat(context(period * 2).get(), req, &reply);
+        if (s.error_code() == grpc::StatusCode::NOT_FOUND) {
+            registerWithMaster();
+        } else if (s.ok()) {
+            const std::lock_guard<std::mutex> lock(mu_);
+            for (const int64_t a : reply.lost_attempt_ids()) {
+                if (held_.count(a) && lost_.insert(a).second)
+                    spdlog::warn("attempt={} worker={}: lease lost (expired or job ended)", a, workerId_);
+            }
+        }
+    }
+}
+
+}  // namespace pf::worker
