@@ -1,11 +1,12 @@
 # pathfarm: the two commands of the README, and the targets they are made of.
 #   make demo   install what is missing, build, render a bundled scene, write EXR + PNG into out/
 #   make test   install what is missing, build, run the test suite (what CI runs)
+#   make test-long   the long statistical tests (CTest label "long") that `make test` leaves out
 BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build demo test test-sanitize bench format clean
+.PHONY: all deps build demo test test-long test-sanitize bench format clean
 
 all: build
 
@@ -21,7 +22,10 @@ demo: build
 	./$(BUILD)/pathfarm render scenes/cornell-box/scene.xml --integrator path --spp 32 -o out/cornell-box.exr
 
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 600
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 600 -LE long
+
+test-long: build
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 3600 -L long
 
 # The bad-input corpus (loader and CLI), the loader, shape and mesh-reader tests under
 # AddressSanitizer + UndefinedBehaviorSanitizer.

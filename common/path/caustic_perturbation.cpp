@@ -26,7 +26,9 @@ ReciprocalKernel CausticPerturbation::angleKernel(const PathView &x) const {
     double lightSide = 0;
     for (int i = a; i < n - 2; ++i) lightSide += (x.vertex(i + 1).position() - x.vertex(i).position()).length();
     const double cameraSide = (x.vertex(n - 1).position() - x.vertex(n - 2).position()).length();
-    const double factor = scale_.radiansPerPixel * cameraSide / lightSide;
+    // Where the light side is much shorter than the camera side the range would exceed a right angle,
+    // beyond which directions wrap around: it is scaled down to end there, keeping its ratio.
+    const double factor = std::min(scale_.radiansPerPixel * cameraSide / lightSide, kPi / 2 / scale_.r2);
     return ReciprocalKernel(scale_.r1 * factor, scale_.r2 * factor);
 }
 

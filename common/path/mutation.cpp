@@ -96,6 +96,9 @@ bool extendWalk(const Scene &scene, Sampler &sampler, TransportMode mode, Mutabl
         if (start.type == VertexType::Surface) start.its.wi = start.its.toLocal(toPred);
         if (start.type == VertexType::Medium) start.its.wi = toPred;
         start.walkMode = mode;
+        // SAMPLENEXT ends a walk whose throughput vanishes; mutations only use the walk's vertices (a vertex
+        // made by a perturbation carries none), so the walk starts from unit throughput.
+        start.throughput = Spectrum(1.0);
     }
     const Film &film = scene.sensor().film();
     for (int k = 0, cur = from; k < steps; ++k, cur += dir) {

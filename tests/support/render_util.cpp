@@ -1,5 +1,7 @@
 #include "support/render_util.h"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -7,7 +9,8 @@
 namespace pf::test {
 
 std::string tempDir(const std::string &name) {
-    const auto dir = std::filesystem::path(PATHFARM_BINARY_DIR) / "test-tmp" / name;
+    // Per process: CTest runs the tests of one executable in parallel processes, which must not share files.
+    const auto dir = std::filesystem::path(PATHFARM_BINARY_DIR) / "test-tmp" / (name + "." + std::to_string(getpid()));
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir.string();
@@ -19,8 +22,7 @@ std::string writeFile(const std::string &dir, const std::string &name, const std
     return path.string();
 }
 
-RenderOutput renderXml(const std::string &xml, const std::string &integrator, int64_t spp, uint64_t seed,
-                       int threads) {
+RenderOutput renderXml(const std::string &xml, const std::string &integrator, int64_t spp, uint64_t seed, int threads) {
     static int counter = 0;
     const std::string dir = tempDir("render-" + std::to_string(counter++));
     auto scene = loadScene(writeFile(dir, "scene.xml", xml));

@@ -10,7 +10,7 @@
 
 namespace pf::test {
 
-// A fresh directory under the build tree for this test's files.
+// A fresh directory under the build tree for this test's files, unique to this process.
 std::string tempDir(const std::string &name);
 // Writes `xml` to dir/name and returns the path.
 std::string writeFile(const std::string &dir, const std::string &name, const std::string &contents);

@@ -1,0 +1,49 @@
+// Energy redistribution path tracing (`erpt`; Cline et al. 2005; ALGORITHMS.md §5) seeded by BDPT, as in
+// Jakob's variant ([TH 8]): every pixel's BDPT samples form a pool of seed paths, each pixel launches
+// short bursts of chainLength mutations from paths resampled from its pool, using Veach's lens, caustic
+// and multi-chain perturbations only, and no post-processing filter (Cline's filters are biased). Bursts
+// need no ergodicity: the weighted seeds represent the image already, and each perturbation keeps that
+// distribution (ALGORITHMS.md §5.2, §2.4).
+//
+// Energy per deposit (ALGORITHMS.md §5.3): pixel p, with luminance estimate W_p from its pool, launches
+// numChains * W_p / W chains on average (W the mean pixel luminance, b̂ / pixels; at most maxChains when
+// that is positive): floor(nu_p + U) chains with U uniform, each of weight W_p / nu_p, so every
+// deposit carries W / (numChains * chainLength) as in Cline's equal-energy scheme, and the pixel's
+// expected total stays W_p whatever the rounding and the cap. The bursts' films are summed.
+//
+// Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
+// numChains (1), maxChains (0: no cap), chainLength (100), lensPerturbation (true), causticPerturbation
+// (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation (false),
+// manifoldPerturbation (false; rejected when true: it arrives with manifold exploration), lambda (50),
+// luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
+// see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel, taken from the scene's
+// sampleCount (see seeding()).
+#pragma once
+#include "integrators/mlt.h"
+
+namespace pf {
+
+class ERPT final : public PathSpaceIntegrator {
+public:
+    explicit ERPT(const Properties &props);
+    std::string name() const override { return "erpt"; }
+    ChainKind chainKind() const override { return ChainKind::Burst; }
+    // The pool: the scene's sampleCount BDPT samples per pixel (Mitsuba: "the size of this pool is given
+    // by the samplesPerPixel parameter of the sample generator").
+    SeedingConfig seeding(const Scene &scene) const override;
+    // A task is a block of pixels, each with its bursts. The budget is the seeding's: `spp` must be the
+    // scene's sampleCount, and under a time budget (spp = 0) the tasks after the last block are empty.
+    uint64_t chainTaskCount(const Scene &scene, int64_t spp) const override;
+    ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
+                        uint64_t index) const override;
+
+    // The expected number of chains nu_p of a pixel with luminance estimate `pixelLuminance` when the mean
+    // pixel luminance is `meanLuminance`.
+    double expectedChains(double pixelLuminance, double meanLuminance) const;
+
+private:
+    double numChains_ = 1;
+    int64_t maxChains_ = 0, chainLength_ = 100;
+};
+
+}  // namespace pf

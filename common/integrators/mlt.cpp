@@ -1,0 +1,111 @@
+#include "integrators/mlt.h"
+
+#include <algorithm>
+
+#include "path/bidirectional_mutation.h"
+#include "path/caustic_perturbation.h"
+#include "path/lens_perturbation.h"
+#include "path/lens_subpath_mutation.h"
+#include "path/multichain_perturbation.h"
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+// The parameter that enables each mutation type, in MutationType order.
+constexpr const char *kMutationParameters[kMutationTypes] = {"bidirectionalMutation", "lensSubpathMutation",
+                                                             "lensPerturbation", "causticPerturbation",
+                                                             "multiChainPerturbation"};
+
+// The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
+// since a path lands wherever it meets the film.
+std::unique_ptr<BDPT> makeBDPT(const SourceLocation &loc, int64_t maxDepth, int64_t rrDepth) {
+    Properties p(ObjectKind::Integrator, "bdpt", loc);
+    p.set("maxDepth", Properties::Type::Integer, maxDepth, loc);
+    p.set("rrDepth", Properties::Type::Integer, rrDepth, loc);
+    return std::make_unique<BDPT>(p);
+}
+
+}  // namespace
+
+const char *mutationParameter(MutationType type) { return kMutationParameters[static_cast<int>(type)]; }
+
+PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vector<MutationType> &defaults) {
+    const int64_t maxDepth = props.getInt("maxDepth", -1), rrDepth = props.getInt("rrDepth", 10);
+    directSamples_ = props.getInt("directSamples", 16);
+    for (int k = 0; k < kMutationTypes; ++k) {
+        const auto type = static_cast<MutationType>(k);
+        const bool byDefault = std::find(defaults.begin(), defaults.end(), type) != defaults.end();
+        if (props.getBool(mutationParameter(type), byDefault)) types_.push_back(type);
+    }
+    if (props.getBool("manifoldPerturbation", false))
+        props.fail("manifoldPerturbation",
+                   "the manifold perturbation arrives with manifold exploration (leave manifoldPerturbation false)");
+    // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda.
+    if (!(props.getFloat("probFactor", props.getFloat("lambda", 50)) > 0)) props.fail("lambda", "must be positive");
+    if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
+    if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
+    if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
+    if (types_.empty()) props.fail("bidirectionalMutation", "at least one mutation or perturbation must be enabled");
+    maxDepth_ = static_cast<int>(maxDepth);
+    bdpt_ = makeBDPT(props.location(), maxDepth, rrDepth);
+    if (directSamples_ > 0)
+        direct_ = makeBDPT(props.location(), maxDepth < 0 ? 2 : std::min<int64_t>(2, maxDepth), rrDepth);
+}
+
+SeedingConfig PathSpaceIntegrator::seedingWith(int64_t samplesPerPixel) const {
+    return {bdpt_.get(), samplesPerPixel, minVertices() - 1};
+}
+
+MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
+    const PerturbationScale scale(scene);
+    MutationSet set;
+    for (const MutationType type : types_) switch (type) {
+            case MutationType::Bidirectional:
+                set.add(std::make_unique<BidirectionalMutation>(minVertices(), maxVertices()));
+                break;
+            case MutationType::LensSubpath:
+                set.add(std::make_unique<LensSubpathMutation>());
+                break;
+            case MutationType::Lens:
+                set.add(std::make_unique<LensPerturbation>(scale));
+                break;
+            case MutationType::Caustic:
+                set.add(std::make_unique<CausticPerturbation>(scale));
+                break;
+            case MutationType::MultiChain:
+                set.add(std::make_unique<MultiChainPerturbation>(scale));
+                break;
+        }
+    return set;
+}
+
+void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
+                                   double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts) const {
+    // The chain starts on the resampled candidate itself (ALGORITHMS.md §2.4), regenerated from its record.
+    MutablePath start;
+    bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });
+    const MutationSet set = mutations(scene);
+    PathChain chain(scene, set, minVertices(), maxVertices(), film, scale);
+    // A candidate carries energy, so its path does; pi = 0 could only come from round-off in re-evaluating
+    // a Dirac vertex from the other side, and such a start is left out rather than divided by.
+    if (start.length() > 0 && chain.start(start) > 0) runMetropolis(chain, task.mutations, rng, nullptr, counts);
+}
+
+MLT::MLT(const Properties &props)
+    : PathSpaceIntegrator(props, {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens,
+                                  MutationType::Caustic, MutationType::MultiChain}) {
+    luminanceSamples_ = props.getInt("luminanceSamples", 100000);
+    if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
+    if (props.getBool("twoStage", false))
+        props.fail("twoStage", "two-stage MLT is not implemented (leave twoStage false)");
+}
+
+SeedingConfig MLT::seeding(const Scene &scene) const {
+    const Film &film = scene.sensor().film();
+    const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
+    return seedingWith(std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels));
+}
+
+}  // namespace pf

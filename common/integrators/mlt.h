@@ -1,0 +1,76 @@
+// Veach's path-space Metropolis light transport (`mlt`; Veach & Guibas 1997; Veach 1997 ch. 11;
+// ALGORITHMS.md §2, §4): long Markov chains on path space, seeded by BDPT and normalized by its estimate b̂
+// of the total image luminance (render/chain.h, render/normalizer.h). A chain's state is a complete path,
+// its target the path's luminance, and its transitions Veach's mutations and perturbations (path/*.h):
+// the bidirectional mutation gives ergodicity, the lens subpath mutation moves over the image, and the
+// lens, caustic and multi-chain perturbations explore the neighbourhood of a path. Mitsuba 0.6 parameter
+// names and defaults:
+//
+//   maxDepth (-1)                  longest path in edges (-1: unbounded)
+//   rrDepth (10)                   Russian roulette of the seeding BDPT (Mitsuba's MLT hard-codes 10)
+//   directSamples (16)             samples per pixel of the direct component (paths of at most two edges),
+//                                  rendered by BDPT without chains; 0 hides it, -1 leaves it to the chains
+//   luminanceSamples (100000)      BDPT samples for seeding and b̂, rounded up to whole samples per pixel
+//   bidirectionalMutation (true), lensPerturbation (true), causticPerturbation (true),
+//   multiChainPerturbation (true)  the mutations in use
+//   lensSubpathMutation (true)     Veach's lens subpath mutation (not in Mitsuba 0.6, which dropped it)
+//   manifoldPerturbation (false)   rejected when true: it arrives with manifold exploration
+//   lambda (50)                    the manifold perturbation's jump size (Mitsuba also reads probFactor)
+//   twoStage (false)               rejected when true: two-stage MLT is not implemented
+//
+// --spp is mutations per pixel (Mitsuba's sampleCount).
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "integrators/bdpt.h"
+#include "path/path_chain.h"
+#include "render/chain.h"
+
+namespace pf {
+
+// The parameter that enables a mutation type (bidirectionalMutation, lensPerturbation, ...).
+const char *mutationParameter(MutationType type);
+
+// What MLT and ERPT share: the BDPT that seeds the chains and renders the direct component, the set of
+// mutations, and the chain itself, a PathChain started on a regenerated seeding candidate.
+class PathSpaceIntegrator : public ChainIntegrator {
+public:
+    MutationCounts mutationTypes() const override { return PathChain::mutationTypes(types_); }
+    void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed, double scale,
+                  PCG32 &rng, ImageBlock &film, MutationCounts &counts) const override;
+    const SamplingIntegrator *directIntegrator() const override { return direct_.get(); }
+    int64_t directSamples() const override { return directSamples_; }
+
+    // The enabled mutations, in mutationTypes() order, with their step sizes for `scene`.
+    MutationSet mutations(const Scene &scene) const;
+    const BDPT &bdpt() const { return *bdpt_; }
+    // Chains leave paths with fewer vertices to the direct component.
+    int minVertices() const { return directSamples_ >= 0 ? 4 : 2; }
+    // The longest paths (-1: unbounded).
+    int maxVertices() const { return maxDepth_ < 0 ? -1 : maxDepth_ + 1; }
+
+protected:
+    // Reads the parameters the two share; `defaults` says which mutations are on unless set.
+    PathSpaceIntegrator(const Properties &props, const std::vector<MutationType> &defaults);
+    // The seeding with `samplesPerPixel` BDPT samples per pixel.
+    SeedingConfig seedingWith(int64_t samplesPerPixel) const;
+
+private:
+    std::unique_ptr<BDPT> bdpt_, direct_;
+    int maxDepth_ = -1;
+    int64_t directSamples_ = 16;
+    std::vector<MutationType> types_;
+};
+
+class MLT final : public PathSpaceIntegrator {
+public:
+    explicit MLT(const Properties &props);
+    std::string name() const override { return "mlt"; }
+    SeedingConfig seeding(const Scene &scene) const override;
+
+private:
+    int64_t luminanceSamples_ = 100000;
+};
+
+}  // namespace pf

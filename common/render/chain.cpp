@@ -1,0 +1,143 @@
+// Chain tasks, and the embedded renderer of Markov-chain integrators: the direct component (if any), the
+// seeding tasks, the normalizer, then waves of chain tasks (one task per core), merged in task order so
+// that the image does not depend on the thread count (ARCHITECTURE.md "A job, end to end").
+#include "render/chain.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <optional>
+#include <thread>
+
+#include "render/image_task.h"
+#include "render/normalizer.h"
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr uint64_t kChainStream = 0xc4a1ULL;
+constexpr uint64_t kDirectSeedTag = 0xd12ec7ULL;
+constexpr uint64_t kMinTaskMutations = 1u << 14;
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+uint64_t cropPixels(const Scene &scene) {
+    const Film &film = scene.sensor().film();
+    return static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
+}
+
+// Runs fn(i) for i in [0, n) on `threads` threads.
+template <class Fn>
+void parallelFor(size_t n, int threads, const Fn &fn) {
+    std::atomic<size_t> next{0};
+    auto worker = [&]() {
+        for (size_t i; (i = next.fetch_add(1)) < n;) fn(i);
+    };
+    std::vector<std::thread> pool;
+    for (int k = 1; k < std::min<int>(threads, static_cast<int>(n)); ++k) pool.emplace_back(worker);
+    worker();
+    for (auto &t : pool) t.join();
+}
+
+}  // namespace
+
+ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task) {
+    const auto start = Clock::now();
+    const uint64_t rays0 = Scene::threadRayCount();
+    ChainResult result{makeFilmBlock(scene), 0, integrator.mutationTypes(), 0, 0};
+    PCG32 rng(hashCombine(seed, task.index), kChainStream);
+    for (const ChainSeed &s : task.seeds)
+        integrator.runChain(scene, seed, task, s, chainDepositScale(integrator.chainKind(), s, task.mutations), rng,
+                            result.film, result.counts);
+    result.mutations = task.mutations * task.seeds.size();
+    result.rays = Scene::threadRayCount() - rays0;
+    result.seconds = secondsSince(start);
+    return result;
+}
+
+uint64_t chainTaskMutations(const Scene &scene) { return std::max(kMinTaskMutations, cropPixels(scene)); }
+
+uint64_t ChainIntegrator::chainTaskCount(const Scene &scene, int64_t spp) const {
+    const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), length = chainTaskMutations(scene);
+    return (total + length - 1) / length;
+}
+
+ChainTask ChainIntegrator::chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
+                                     uint64_t index) const {
+    const uint64_t chains = chainsPerTask(scene);
+    ChainTask task;
+    task.index = index;
+    task.seeds = normalizer.resample(seed, index, chains);
+    task.depthLuminance = normalizer.depthLuminance();
+    uint64_t size = chainTaskMutations(scene);
+    if (spp > 0) {
+        const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), count = chainTaskCount(scene, spp);
+        size = total / count + (index < total % count ? 1 : 0);
+    }
+    task.mutations = size / chains;
+    return task;
+}
+
+Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
+    const auto start = Clock::now();
+    const Film &film = scene.sensor().film();
+    const int threads =
+        opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+
+    std::optional<Bitmap> direct;
+    if (const SamplingIntegrator *d = directIntegrator(); d && directSamples() > 0) {
+        RenderOptions o;
+        o.spp = directSamples();
+        o.seed = hashCombine(opt.seed, kDirectSeedTag);
+        o.threads = threads;
+        RenderStats s;
+        direct = d->render(scene, o, s);
+        stats.rays += s.rays;
+    }
+
+    const SeedingConfig config = seeding(scene);
+    const std::vector<SeedingTask> seedingPlan = seedingTasks(scene);
+    std::vector<SeedingResult> seeds(seedingPlan.size());
+    parallelFor(seedingPlan.size(), threads,
+                [&](size_t i) { seeds[i] = runSeedingTask(scene, config, opt.seed, seedingPlan[i]); });
+    for (const SeedingResult &r : seeds) stats.rays += r.rays;
+    const Normalizer normalizer(std::move(seeds));
+
+    // Under a time budget the clock decides whether another wave of whole chains starts, never when a chain
+    // stops (ALGORITHMS.md §2.5).
+    const bool timed = opt.timeLimit > 0;
+    const int64_t spp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
+    const uint64_t count = normalizer.luminance() > 0 ? (timed ? UINT64_MAX : chainTaskCount(scene, spp)) : 0;
+    ChainImage image{makeFilmBlock(scene), 0, {}, 0, 0};
+    const auto develop = [&]() {
+        Bitmap img = developChains(film, image, chainKind(), normalizer.luminance());
+        if (direct)
+            for (size_t i = 0; i < img.rgb.size(); ++i) img.rgb[i] += direct->rgb[i];
+        return img;
+    };
+    double lastWave = 0;
+    for (uint64_t next = 0; next < count;) {
+        if (timed && next > 0 && secondsSince(start) + lastWave > opt.timeLimit) break;
+        const auto waveStart = Clock::now();
+        const size_t n = static_cast<size_t>(std::min<uint64_t>(static_cast<uint64_t>(threads), count - next));
+        std::vector<std::optional<ChainResult>> results(n);
+        parallelFor(n, threads, [&](size_t i) {
+            results[i] = runChainTask(scene, *this, opt.seed, chainTask(scene, normalizer, opt.seed, spp, next + i));
+        });
+        for (const auto &r : results) mergeChainResult(image, *r);
+        next += n;
+        lastWave = secondsSince(waveStart);
+        if (opt.onPass) opt.onPass(static_cast<int64_t>(image.mutations / cropPixels(scene)), develop());
+    }
+    stats.rays += image.rays;
+    stats.samples = image.mutations;
+    stats.samplesPerPixel = static_cast<int64_t>(image.mutations / cropPixels(scene));
+    stats.seconds = secondsSince(start);
+    return develop();
+}
+
+}  // namespace pf

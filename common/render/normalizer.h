@@ -1,0 +1,70 @@
+// Between seeding and chains, and after the chains: the estimate b̂ of the total image luminance, the
+// resampling of chain starts from the seeding pool, and the merge and normalization rules of the chain
+// films (ALGORITHMS.md §2.3-2.5, §5.3), in one place.
+//
+// Resampling (§2.4): every chain's start is drawn from the pool with probability w_i / W. The chains of one
+// task are drawn together by systematic resampling (one uniform number per task, strata over the pool's
+// cumulative weights, which run in pixel order, so a task's chains also spread over the image); tasks draw
+// independently (generators seeded by (job seed, task index)), so the starts do not depend on how many
+// tasks a time budget lets run. Each of the K long chains then carries weight W / K, which the long-chain rule
+// applies at merge time: image = b̂ * (sum of films) / (sum of mutations), with b̂ = W from the same pool,
+// which makes the image exactly unbiased for any fixed chain lengths. Bursts (§5.3) draw C chains from the
+// pool of one pixel and give each the weight W_p / C, W_p the pixel's luminance estimate; their films are
+// summed.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "render/chain.h"
+#include "render/seeding.h"
+
+namespace pf {
+
+class Normalizer {
+public:
+    // The results of every seeding task of a job, in task order (pixel order).
+    explicit Normalizer(std::vector<SeedingResult> results);
+
+    // b̂ = W, the sum of all candidate weights.
+    double luminance() const { return luminance_; }
+    const std::vector<double> &depthLuminance() const { return depthLuminance_; }
+    const std::vector<SeedCandidate> &candidates() const { return pool_; }
+
+    // The starts of the `count` long chains of task `taskIndex` (weight 1: the merge rule applies W / K);
+    // none when the pool carries no energy.
+    std::vector<ChainSeed> resample(uint64_t seed, uint64_t taskIndex, uint64_t count) const;
+    // W_p: the luminance estimate of film pixel `pixel` from its own candidates (those it generated,
+    // light-tracing ones included).
+    double pixelLuminance(uint64_t pixel) const;
+    // `chains` burst starts from the pool of film pixel `pixel`, each with weight W_p / chains; empty when
+    // the pixel's pool carries no energy.
+    std::vector<ChainSeed> resamplePixel(uint64_t seed, uint64_t pixel, int chains) const;
+
+private:
+    // Index into pool_ of the candidate at cumulative weight `target`.
+    size_t find(double target) const;
+    std::pair<size_t, size_t> pixelRange(uint64_t pixel) const;
+
+    std::vector<SeedCandidate> pool_;
+    std::vector<double> cumulative_;  // cumulative_[i] = sum of the weights before candidate i (size + 1)
+    std::vector<double> depthLuminance_;
+    double luminance_ = 0;
+};
+
+// The merged chain films of a render (or of a farm job so far).
+struct ChainImage {
+    ImageBlock film;
+    uint64_t mutations = 0;
+    MutationCounts counts;
+    uint64_t rays = 0;
+    double seconds = 0;  // summed over tasks (core seconds)
+};
+
+// The factor a chain's deposits carry: 1 for long chains, weight / M for bursts.
+double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutations);
+// Adds a task's result. Tasks merged in the same order give the same bits.
+void mergeChainResult(ChainImage &image, const ChainResult &result);
+// The normalized image: long chains b̂ * films / mutations, bursts the sum.
+Bitmap developChains(const Film &film, const ChainImage &image, ChainKind kind, double luminance);
+
+}  // namespace pf

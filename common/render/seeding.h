@@ -1,0 +1,60 @@
+// The seeding phase of Markov-chain rendering (ALGORITHMS.md §2.3-2.4, §5.3; ARCHITECTURE.md "A job, end
+// to end", step 2): BDPT over a range of pixels returns compact candidate records instead of paths. A
+// record names the render's seed stream position (film pixel, sample index) and the strategy (s, t), so any
+// machine regenerates the path exactly (BDPT::regenerate, or a chain's start); its weight is the luminance
+// of the strategy's MIS-weighted contribution divided by the samples per pixel, so that the weights of all
+// candidates sum to b̂, the BDPT estimate of the total image luminance (§2.3: pixel values are per-pixel
+// integrals and b is their sum).
+//
+// A seeding task is a pure function of (scene, algorithm, job seed, pixel range): pixel p's sample i is
+// drawn from IndependentSampler(seed, p, i) exactly as the render loop draws it, so a retried task returns
+// the same bits, and seeding with seed S takes the same samples as `bdpt` rendering with seed S.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "image/film.h"
+#include "integrators/bdpt.h"
+
+namespace pf {
+
+struct SeedCandidate {
+    PathRecord record;
+    double weight = 0;  // luminance of the MIS-weighted contribution / samples per pixel
+};
+
+// What an algorithm asks of seeding; the same for every task of a job.
+struct SeedingConfig {
+    const BDPT *bdpt = nullptr;
+    int64_t samplesPerPixel = 1;
+    // Strategies of paths with fewer edges are left out (the component rendered without chains, as with
+    // Mitsuba's directSamples); 1 keeps every path.
+    int minDepth = 1;
+};
+
+// Crop-window pixels [firstPixel, firstPixel + pixelCount) in row-major order.
+struct SeedingTask {
+    uint64_t firstPixel = 0;
+    uint64_t pixelCount = 0;
+};
+
+struct SeedingResult {
+    std::vector<SeedCandidate> candidates;  // in pixel, sample, strategy order; zero weights left out
+    std::vector<double> depthLuminance;     // sum of the candidates' weights per path depth s + t - 1
+    uint64_t samples = 0;                   // BDPT samples taken
+    uint64_t rays = 0;
+    double seconds = 0;
+};
+
+// The fixed split of the crop window into seeding tasks, shared by the embedded renderer and the farm.
+std::vector<SeedingTask> seedingTasks(const Scene &scene);
+
+SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task);
+
+// The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.
+uint64_t filmPixel(const Film &film, uint64_t cropIndex);
+// The raster position of a pixel sample, drawn from `sampler` as the render loop draws it (two numbers,
+// crop-relative raster coordinates): the first step of regenerating a record.
+Vec2 samplePixel(const Film &film, uint64_t pixel, Sampler &sampler);
+
+}  // namespace pf

@@ -1,0 +1,374 @@
+// Detailed balance of Veach's mutations and perturbations (Veach 1997 §11.2-11.4; ALGORITHMS.md §9.1.4, §9.4)
+// on the shared scenes and Veach's swimming pool, for random current paths (BDPT's, and states that chains
+// reach from them) and proposals drawn by each mutation:
+//
+// * the density each mutation reports is the density its sampler has: for proposals whose new vertices
+//   are all non-specular (the canonical measure is then the area measure), T(x -> y) equals 1 / |det J|,
+//   J the finite-difference Jacobian of the new vertices' surface coordinates with respect to the random
+//   numbers the mutation drew;
+// * every sampled proposal has T(x -> y) > 0, and the reverse move has T(y -> x) > 0 except where it is
+//   structurally impossible (checked case by case below);
+// * pi(x) T(x -> y) a(x -> y) = pi(y) T(y -> x) a(y -> x) with the core's acceptance, mixture selection
+//   probabilities included.
+//
+// Whether the mutations keep the right stationary distribution as a whole is tested by rendering:
+// test_erpt.cpp runs bursts with each perturbation alone against BDPT.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "integrators/bdpt.h"
+#include "mcmc/metropolis.h"
+#include "path/bidirectional_mutation.h"
+#include "path/caustic_perturbation.h"
+#include "path/lens_perturbation.h"
+#include "path/lens_subpath_mutation.h"
+#include "path/multichain_perturbation.h"
+#include "path/path_chain.h"
+#include "render/image_task.h"
+#include "scene/scene.h"
+#include "test_mlt_common.h"
+
+namespace pf::test {
+namespace {
+
+constexpr int kResolution = 16;
+
+std::unique_ptr<Scene> testScene(const std::string &name) { return loadMLTTestScene(name, kResolution, 4); }
+
+// The longest paths tested: the scene's maxDepth, at most 6 edges.
+int maxVertices(const Scene &scene) {
+    const int64_t depth = scene.integratorProperties().getInt("maxDepth", -1);
+    return static_cast<int>(depth < 0 ? 7 : std::min<int64_t>(depth, 6) + 1);
+}
+
+// Complete paths as BDPT's strategies produce them (no Russian roulette), with nonzero contribution.
+std::vector<MutablePath> bdptPaths(const Scene &scene, size_t count) {
+    Properties props(ObjectKind::Integrator, "bdpt", {});
+    props.set("maxDepth", Properties::Type::Integer, int64_t(maxVertices(scene) - 1), {});
+    props.set("rrDepth", Properties::Type::Integer, int64_t(100), {});
+    const BDPT bdpt(props);
+    std::vector<MutablePath> paths;
+    for (uint64_t sample = 0; paths.size() < count && sample < 100000; ++sample) {
+        IndependentSampler sampler(17, sample, 0);
+        const Vec2 raster(sampler.next1D() * kResolution, sampler.next1D() * kResolution);
+        bdpt.evaluate(scene, sampler, raster, [&](const StrategySample &x) {
+            if (paths.size() < count && x.weight > 0 && chainContribution(scene, *x.path).luminance() > 0)
+                paths.emplace_back(*x.path);
+        });
+    }
+    return paths;
+}
+
+// Every mutation type, in MutationType order.
+MutationSet allMutations(const Scene &scene) {
+    const PerturbationScale scale(scene);
+    MutationSet set;
+    set.add(std::make_unique<BidirectionalMutation>(2, maxVertices(scene)));
+    set.add(std::make_unique<LensSubpathMutation>());
+    set.add(std::make_unique<LensPerturbation>(scale));
+    set.add(std::make_unique<CausticPerturbation>(scale));
+    set.add(std::make_unique<MultiChainPerturbation>(scale));
+    return set;
+}
+
+// Random current paths: BDPT's, as chains start from, each followed by the state a chain with every
+// mutation reaches from it in a few steps (mutated paths hold vertices that no walk made).
+std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
+    const MutationSet set = allMutations(scene);
+    ImageBlock film = makeFilmBlock(scene);
+    MutationCounts counts =
+        PathChain::mutationTypes({MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens,
+                                  MutationType::Caustic, MutationType::MultiChain});
+    PCG32 rng(5, 7);
+    std::vector<MutablePath> paths;
+    for (const MutablePath &x : bdptPaths(scene, count / 2)) {
+        paths.push_back(x);
+        PathChain chain(scene, set, 2, maxVertices(scene), film, 1.0);
+        chain.start(x);
+        runMetropolis(chain, 10, rng, nullptr, counts);
+        paths.push_back(chain.current());
+    }
+    return paths;
+}
+
+// Replays a recorded list of numbers (then fresh ones), and records what it hands out.
+class ReplaySampler final : public Sampler {
+public:
+    explicit ReplaySampler(std::vector<double> numbers, uint64_t seed = 0)
+        : numbers_(std::move(numbers)), rng_(seed, 3) {}
+    double next1D() override {
+        if (next_ == numbers_.size()) numbers_.push_back(rng_.nextDouble());
+        return numbers_[next_++];
+    }
+    const std::vector<double> &numbers() const { return numbers_; }
+
+private:
+    std::vector<double> numbers_;
+    size_t next_ = 0;
+    PCG32 rng_;
+};
+
+// Why the reverse of x -> y can be impossible although the forward move was made.
+bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation, const PathView &x, const PathView &y,
+                                   const MutationRecord &record) {
+    switch (mutation.type()) {
+        case MutationType::Caustic: {
+            // The angle range depends on the state: the reverse angle may lie outside y's range.
+            const auto &caustic = static_cast<const CausticPerturbation &>(mutation);
+            int a = x.length() - 3;
+            while (!isNonSpecular(x.vertex(a))) --a;
+            const Vec3 axis = rayDirection(scene, y.vertex(a), y.vertex(a + 1));
+            const Vec3 back = rayDirection(scene, x.vertex(a), x.vertex(a + 1));
+            const double theta = std::atan2(cross(axis, back).length(), dot(axis, back));
+            const ReciprocalKernel k = caustic.angleKernel(y);
+            return theta < k.lo() || theta > k.hi();
+        }
+        case MutationType::Bidirectional: {
+            // A kept end vertex of y turned specular when the walk left it through a Dirac lobe, or no
+            // split of x's deleted vertices ends at a possible connection.
+            const int l = record.l, end = record.l + record.added + 1, n = x.length();
+            const auto keepable = [](const PathVertex &v) { return isNonSpecular(v) && !v.hasDeltaPosition(); };
+            if ((l >= 0 && !keepable(y.vertex(l))) || (end < y.length() && !keepable(y.vertex(end)))) return true;
+            const int deleted = record.m - l - 1, lastSplit = record.m == n ? deleted - 1 : deleted;
+            for (int s = 0; s <= lastSplit; ++s)
+                if (isJunction(x, l + s)) return false;
+            return true;
+        }
+        default:
+            return false;
+    }
+}
+
+struct BalanceCase {
+    std::string scene;
+    MutationType type;
+};
+
+class DetailedBalance : public ::testing::TestWithParam<BalanceCase> {};
+
+TEST_P(DetailedBalance, HoldsForSampledProposals) {
+    const BalanceCase &c = GetParam();
+    auto scene = testScene(c.scene);
+    const MutationSet set = allMutations(*scene);
+    const size_t k = static_cast<size_t>(c.type);
+    const Mutation &mutation = set[k];
+    const std::vector<MutablePath> paths = currentPaths(*scene, 3000);
+    int applicable = 0, proposals = 0, symmetric = 0, impossibleReverse = 0;
+    for (size_t i = 0; i < paths.size() && proposals < 400; ++i) {
+        const MutablePath &x = paths[i];
+        if (!mutation.applies(x)) continue;
+        ++applicable;
+        const double piX = chainContribution(*scene, x).luminance();
+        for (uint64_t j = 0; j < 8; ++j) {
+            IndependentSampler sampler(99, i, j);
+            MutablePath y;
+            MutationRecord record;
+            if (!mutation.sample(*scene, sampler, x, y, record)) continue;
+            const double piY = chainContribution(*scene, y).luminance();
+            if (!(piY > 0)) continue;
+            ++proposals;
+            const double txy = set.selectionProbability(x, k) * mutation.density(*scene, x, y, record);
+            const double tyx = set.selectionProbability(y, k) * mutation.density(*scene, y, x, record.reverse());
+
+            ASSERT_GT(txy, 0.0) << "a sampled proposal must have positive density (path " << i << ")";
+            ASSERT_TRUE(std::isfinite(txy) && std::isfinite(tyx));
+            if (tyx > 0) {
+                ++symmetric;
+            } else {
+                EXPECT_TRUE(reverseStructurallyImpossible(*scene, mutation, x, y, record))
+                    << "asymmetric support: path " << i << " proposal " << j;
+                ++impossibleReverse;
+            }
+            Proposal forward, backward;
+            forward.target = piY, forward.forward = txy, forward.backward = tyx;
+            backward.target = piX, backward.forward = tyx, backward.backward = txy;
+            const double lhs = piX * txy * acceptance(piX, forward), rhs = piY * tyx * acceptance(piY, backward);
+            EXPECT_NEAR(lhs, rhs, 1e-12 * std::max(lhs, rhs)) << "path " << i << " proposal " << j;
+        }
+    }
+    std::printf("%s %s: %d applicable paths, %d proposals, %d with symmetric support, %d reverse impossible\n",
+                c.scene.c_str(), mutationName(c.type), applicable, proposals, symmetric, impossibleReverse);
+    EXPECT_GE(symmetric, 50) << "too few proposals to mean anything";
+    EXPECT_LE(impossibleReverse, symmetric / 10) << "the reverse move should almost always be possible";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, DetailedBalance,
+    ::testing::Values(
+        BalanceCase{"cornell-box", MutationType::Bidirectional}, BalanceCase{"cornell-box", MutationType::LensSubpath},
+        BalanceCase{"cornell-box", MutationType::Lens}, BalanceCase{"cornell-box", MutationType::Caustic},
+        BalanceCase{"veach-mis", MutationType::Bidirectional}, BalanceCase{"veach-mis", MutationType::LensSubpath},
+        BalanceCase{"veach-mis", MutationType::Lens}, BalanceCase{"veach-mis", MutationType::Caustic},
+        BalanceCase{"veach-bidir", MutationType::Bidirectional}, BalanceCase{"veach-bidir", MutationType::LensSubpath},
+        BalanceCase{"veach-bidir", MutationType::Lens}, BalanceCase{"veach-bidir", MutationType::Caustic},
+        BalanceCase{"ring-caustic", MutationType::Bidirectional}, BalanceCase{"ring-caustic", MutationType::Lens},
+        BalanceCase{"ring-caustic", MutationType::Caustic}, BalanceCase{"pool", MutationType::Lens},
+        BalanceCase{"pool", MutationType::MultiChain}),
+    [](const ::testing::TestParamInfo<BalanceCase> &info) {
+        std::string name = info.param.scene + "_" + mutationName(info.param.type);
+        for (char &ch : name)
+            if (ch == '-') ch = '_';
+        return name;
+    });
+
+// Surface coordinates of the new non-specular vertices of y (two per vertex, in a tangent frame of the
+// vertex; pinholes and point lights have none).
+std::vector<double> surfaceCoordinates(const PathView &y, const std::vector<int> &vertices,
+                                       const std::vector<Frame> &frames) {
+    std::vector<double> coords;
+    for (size_t i = 0; i < vertices.size(); ++i) {
+        const Vec3 p = y.vertex(vertices[i]).position();
+        coords.push_back(dot(p, frames[i].s));
+        coords.push_back(dot(p, frames[i].t));
+    }
+    return coords;
+}
+
+double determinant(std::vector<std::vector<double>> a) {
+    const size_t n = a.size();
+    double det = 1;
+    for (size_t c = 0; c < n; ++c) {
+        size_t pivot = c;
+        for (size_t r = c + 1; r < n; ++r)
+            if (std::abs(a[r][c]) > std::abs(a[pivot][c])) pivot = r;
+        if (pivot != c) std::swap(a[pivot], a[c]), det = -det;
+        det *= a[c][c];
+        if (det == 0) return 0;
+        for (size_t r = c + 1; r < n; ++r) {
+            const double f = a[r][c] / a[c][c];
+            for (size_t k = c; k < n; ++k) a[r][k] -= f * a[c][k];
+        }
+    }
+    return det;
+}
+
+// 1 / |det J| for the proposal that `numbers` produce from x, J by central differences; 0 when the
+// Jacobian cannot be formed (a difference crosses a discontinuity, a specular vertex, or the number of
+// coordinates differs from the number of numbers that move them).
+double finiteDifferenceDensity(const Scene &scene, const Mutation &mutation, const MutablePath &x,
+                               const std::vector<double> &numbers, const MutablePath &y, const MutationRecord &record) {
+    std::vector<int> vertices;
+    std::vector<Frame> frames;
+    for (int i = record.l + 1; i <= record.l + record.added; ++i) {
+        const PathVertex &v = y.vertex(i);
+        // The walks weigh the directions they sampled, EVALPDF the directions between vertex positions,
+        // which differ by the offset of spawned rays over the edge length (test_path_space.cpp): edges
+        // shorter than 1000 offsets are left out, so that this test resolves errors of 1e-3.
+        for (const int j : {i - 1, i + 1})
+            if (j >= 0 && j < y.length() &&
+                (y.vertex(j).position() - v.position()).length() < 1e3 * scene.epsilonAt(v.position()))
+                return 0;
+        if (v.delta || v.type == VertexType::Medium) return 0;
+        if (v.hasDeltaPosition()) continue;
+        vertices.push_back(i);
+        frames.emplace_back(v.type == VertexType::Surface ? v.its.n : v.ps.n);
+    }
+    const std::vector<double> base = surfaceCoordinates(y, vertices, frames);
+    std::vector<std::vector<double>> columns;
+    const double h = 1e-7;
+    for (size_t j = 0; j < numbers.size(); ++j) {
+        std::vector<double> column;
+        bool moved = false, broken = false;
+        std::vector<double> plus, minus;
+        for (const double sign : {1.0, -1.0}) {
+            std::vector<double> u = numbers;
+            u[j] += sign * h;
+            ReplaySampler sampler(u);
+            MutablePath z;
+            MutationRecord r;
+            if (u[j] <= 0 || u[j] >= 1 || !mutation.sample(scene, sampler, x, z, r) || r.l != record.l ||
+                r.m != record.m || r.added != record.added) {
+                broken = true;
+                break;
+            }
+            (sign > 0 ? plus : minus) = surfaceCoordinates(z, vertices, frames);
+        }
+        if (broken) return 0;
+        for (size_t r = 0; r < base.size(); ++r) {
+            const double forward = (plus[r] - base[r]) / h, backward = (base[r] - minus[r]) / h;
+            // One-sided differences that disagree straddle a discontinuity (another surface, an edge).
+            if (std::abs(forward - backward) > 1e-3 * (std::abs(forward) + std::abs(backward)) + 1e-9) return 0;
+            column.push_back((plus[r] - minus[r]) / (2 * h));
+            moved = moved || column.back() != 0;
+        }
+        if (moved) columns.push_back(column);
+    }
+    if (columns.size() != base.size()) return 0;
+    std::vector<std::vector<double>> jacobian(base.size(), std::vector<double>(base.size()));
+    for (size_t r = 0; r < base.size(); ++r)
+        for (size_t c = 0; c < base.size(); ++c) jacobian[r][c] = columns[c][r];
+    const double det = std::abs(determinant(jacobian));
+    return det > 0 ? 1.0 / det : 0.0;
+}
+
+struct JacobianCase {
+    std::string scene;
+    MutationType type;
+};
+
+class DensityMatchesSampler : public ::testing::TestWithParam<JacobianCase> {};
+
+// Scenes without specular surfaces, where every new vertex is measured by area.
+TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
+    const JacobianCase &c = GetParam();
+    auto scene = testScene(c.scene);
+    const MutationSet set = allMutations(*scene);
+    const Mutation &mutation = set[static_cast<size_t>(c.type)];
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 400);
+    int checked = 0;
+    double worst = 0;
+    for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
+        const MutablePath &x = paths[i];
+        if (!mutation.applies(x)) continue;
+        ReplaySampler sampler({}, 1000 + i);
+        MutablePath y;
+        MutationRecord record;
+        if (!mutation.sample(*scene, sampler, x, y, record) || !(chainContribution(*scene, y).luminance() > 0))
+            continue;
+        const double fd = finiteDifferenceDensity(*scene, mutation, x, sampler.numbers(), y, record);
+        if (!(fd > 0)) continue;
+        ++checked;
+        double relative;
+        if (c.type == MutationType::Bidirectional) {
+            // The density of the split that was drawn is one of the terms of T's sum over splits.
+            std::vector<double> pFwd, pRev;
+            evalDensities(*scene, y, pFwd, pRev);
+            relative = kInfinity;
+            for (int s = 0; s <= record.added; ++s) {
+                if (!isJunction(y, record.l + s)) continue;
+                // A new emitter node is chosen with the discrete pmf of emitter selection, which the
+                // Jacobian does not see.
+                const double pmf = record.l < 0 && s > 0 ? scene->emitterPmf(y.vertex(0).emitter) : 1.0;
+                const double term = walkDensity(*scene, y, record.l, s, record.l + record.added + 1, pFwd, pRev);
+                relative = std::min(relative, std::abs(term / pmf / fd - 1));
+            }
+        } else {
+            relative = std::abs(mutation.density(*scene, x, y, record) / fd - 1);
+        }
+        worst = std::max(worst, relative);
+        EXPECT_LT(relative, 2e-3) << "path " << i << ": density disagrees with the sampler's Jacobian";
+    }
+    std::printf("%s %s: %d Jacobians, worst relative difference %.2g\n", c.scene.c_str(), mutationName(c.type), checked,
+                worst);
+    EXPECT_GE(checked, 20) << "too few proposals checked";
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, DensityMatchesSampler,
+                         ::testing::Values(JacobianCase{"cornell-box", MutationType::Bidirectional},
+                                           JacobianCase{"cornell-box", MutationType::LensSubpath},
+                                           JacobianCase{"cornell-box", MutationType::Lens},
+                                           JacobianCase{"cornell-box", MutationType::Caustic},
+                                           JacobianCase{"veach-mis", MutationType::Bidirectional},
+                                           JacobianCase{"veach-mis", MutationType::Lens},
+                                           JacobianCase{"veach-mis", MutationType::Caustic}),
+                         [](const ::testing::TestParamInfo<JacobianCase> &info) {
+                             std::string name = info.param.scene + "_" + mutationName(info.param.type);
+                             for (char &ch : name)
+                                 if (ch == '-') ch = '_';
+                             return name;
+                         });
+
+}  // namespace
+}  // namespace pf::test

@@ -1,0 +1,77 @@
+// The long version of test_erpt (label "long", `make test-long`): `erpt` against a BDPT reference at
+// 32 x 32 with 32 independent renders each, with Mitsuba's defaults and with every path left to the
+// chains, and each of Veach's mutations alone on every scene where it applies (ALGORITHMS.md §5.2: bursts
+// stay unbiased with any transition rule that keeps the target, so each one is tested by itself).
+#include <gtest/gtest.h>
+
+#include "test_mlt_common.h"
+
+namespace pf::test {
+namespace {
+
+ConvergenceSetup longSetup() {
+    ConvergenceSetup s;
+    s.res = 32;
+    s.seeds = 32;
+    s.referenceSpp = 128;
+    s.budget = 16;
+    s.sigmas = 5;
+    s.maxMedianError = 0.04;
+    s.maxImageError = 0.02;
+    return s;
+}
+
+struct DefaultsCase {
+    std::string scene;
+    bool separateDirect;
+};
+
+class LongERPTConvergence : public ::testing::TestWithParam<DefaultsCase> {};
+
+// 49 comparisons per case at 5 standard errors of a Student t with 31 degrees of freedom.
+TEST_P(LongERPTConvergence, AgreesWithBDPT) {
+    const DefaultsCase &c = GetParam();
+    const std::vector<std::pair<std::string, std::string>> params = {{"directSamples", c.separateDirect ? "16" : "-1"},
+                                                                     {"chainLength", "200"}};
+    expectConvergence(c.scene, "erpt", params, longSetup(), c.scene + " erpt");
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, LongERPTConvergence,
+                         ::testing::Values(DefaultsCase{"cornell-box", false}, DefaultsCase{"cornell-box", true},
+                                           DefaultsCase{"veach-mis", false}, DefaultsCase{"veach-mis", true},
+                                           DefaultsCase{"veach-bidir", false}, DefaultsCase{"veach-bidir", true}),
+                         [](const auto &info) {
+                             std::string n = info.param.scene + (info.param.separateDirect ? "_direct" : "_chains");
+                             std::replace(n.begin(), n.end(), '-', '_');
+                             return n;
+                         });
+
+struct Case {
+    std::string scene;
+    MutationType type;
+};
+
+class LongSingleMutationBursts : public ::testing::TestWithParam<Case> {};
+
+TEST_P(LongSingleMutationBursts, AgreeWithBDPT) {
+    expectSingleMutationConvergence(GetParam().scene, GetParam().type, longSetup());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, LongSingleMutationBursts,
+    ::testing::Values(Case{"cornell-box", MutationType::Bidirectional}, Case{"cornell-box", MutationType::LensSubpath},
+                      Case{"cornell-box", MutationType::Lens}, Case{"cornell-box", MutationType::Caustic},
+                      Case{"veach-mis", MutationType::Bidirectional}, Case{"veach-mis", MutationType::LensSubpath},
+                      Case{"veach-mis", MutationType::Lens}, Case{"veach-mis", MutationType::Caustic},
+                      Case{"veach-bidir", MutationType::Bidirectional}, Case{"veach-bidir", MutationType::LensSubpath},
+                      Case{"veach-bidir", MutationType::Lens}, Case{"veach-bidir", MutationType::Caustic},
+                      Case{"pool", MutationType::Lens}, Case{"pool", MutationType::MultiChain},
+                      Case{"pool-underwater", MutationType::Caustic}),
+    [](const auto &info) {
+        std::string n = info.param.scene + "_" + mutationName(info.param.type);
+        std::replace(n.begin(), n.end(), '-', '_');
+        return n;
+    });
+
+}  // namespace
+}  // namespace pf::test

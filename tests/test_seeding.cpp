@@ -1,0 +1,195 @@
+// Seeding and normalization (render/seeding.h, render/normalizer.h; ALGORITHMS.md §2.3-2.4, §5.3, §9.1.5):
+// b̂ is the BDPT estimate of the total image luminance, candidates regenerate exactly from their records,
+// chain starts are drawn in proportion to weight (chi-square), per-pixel pools add up to the whole, and a
+// chain's start state is the candidate it was resampled from.
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "integrators/bdpt.h"
+#include "mcmc/pss_integrator.h"
+#include "render/normalizer.h"
+#include "support/chi2.h"
+#include "test_pssmlt_common.h"
+
+namespace pf::test {
+namespace {
+
+constexpr uint64_t kSeed = 4242;
+
+Normalizer seedAll(const Scene &scene, const SeedingConfig &config, uint64_t seed) {
+    std::vector<SeedingResult> results;
+    for (const SeedingTask &t : seedingTasks(scene)) results.push_back(runSeedingTask(scene, config, seed, t));
+    return Normalizer(std::move(results));
+}
+
+const PrimarySampleIntegrator &asPSS(const Integrator &i) { return dynamic_cast<const PrimarySampleIntegrator &>(i); }
+
+double imageLuminance(const Bitmap &img) {
+    double sum = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) sum += img.get(x, y).luminance();
+    return sum;
+}
+
+class Seeding : public ::testing::TestWithParam<std::string> {};
+
+// §2.3: b̂ (the sum of the candidate weights, which carry 1 / spp) equals the total luminance of the
+// `bdpt` image rendered with the same seed and samples per pixel (a box filter puts every sample in its own
+// pixel), up to the image's float storage. The per-pixel pools add up to the same total (§9.1.5).
+TEST_P(Seeding, LuminanceIsTheBDPTEstimateOfTheImageTotal) {
+    auto scene = loadChainTestScene(GetParam(), 16);
+    const int spp = 8;
+    const auto pssmlt = makeTestIntegrator(*scene, "pssmlt", {{"directSamples", "-1"}, {"luminanceSamples", "2048"}});
+    const SeedingConfig config = asPSS(*pssmlt).seeding(*scene);
+    ASSERT_EQ(config.samplesPerPixel, spp);
+    ASSERT_EQ(config.minDepth, 1);
+    const Normalizer n = seedAll(*scene, config, kSeed);
+
+    RenderOptions opt;
+    opt.spp = spp;
+    opt.seed = kSeed;
+    opt.threads = 1;
+    RenderStats stats;
+    const Bitmap bdpt = makeTestIntegrator(*scene, "bdpt", {})->render(*scene, opt, stats);
+    const double total = imageLuminance(bdpt);
+    ASSERT_GT(total, 0);
+    EXPECT_NEAR(n.luminance(), total, 1e-6 * total);
+
+    double pools = 0, weights = 0, depths = 0;
+    const Film &film = scene->sensor().film();
+    for (uint64_t i = 0; i < static_cast<uint64_t>(film.cropWidth() * film.cropHeight()); ++i)
+        pools += n.pixelLuminance(filmPixel(film, i));
+    for (const SeedCandidate &c : n.candidates()) weights += c.weight;
+    for (double d : n.depthLuminance()) depths += d;
+    EXPECT_NEAR(pools, n.luminance(), 1e-12 * total);
+    EXPECT_NEAR(weights, n.luminance(), 1e-12 * total);
+    EXPECT_DOUBLE_EQ(depths, n.luminance());
+}
+
+// Every candidate regenerates from (seed, record) with exactly its weight (ARCHITECTURE.md: no paths on
+// the wire), and leaving out the direct component drops exactly the paths of at most two edges.
+TEST_P(Seeding, CandidatesRegenerateExactly) {
+    auto scene = loadChainTestScene(GetParam(), 16);
+    const auto all = makeTestIntegrator(*scene, "pssmlt", {{"directSamples", "-1"}, {"luminanceSamples", "1024"}});
+    const auto indirect = makeTestIntegrator(*scene, "pssmlt", {{"luminanceSamples", "1024"}});
+    const SeedingConfig config = asPSS(*all).seeding(*scene);
+    const Normalizer n = seedAll(*scene, config, kSeed), m = seedAll(*scene, asPSS(*indirect).seeding(*scene), kSeed);
+    ASSERT_GT(n.candidates().size(), 100u);
+    size_t checked = 0;
+    for (size_t i = 0; i < n.candidates().size(); i += 7, ++checked) {
+        const SeedCandidate &c = n.candidates()[i];
+        double again = -1;
+        EXPECT_TRUE(config.bdpt->regenerate(*scene, kSeed, c.record, [&](const StrategySample &x) {
+            again = x.value.luminance() / static_cast<double>(config.samplesPerPixel);
+        }));
+        EXPECT_EQ(again, c.weight) << "candidate " << i;
+    }
+    EXPECT_GT(checked, 10u);
+    std::vector<SeedCandidate> deep;
+    for (const SeedCandidate &c : n.candidates())
+        if (c.record.s + c.record.t - 1 >= 3) deep.push_back(c);
+    ASSERT_EQ(deep.size(), m.candidates().size());
+    for (size_t i = 0; i < deep.size(); ++i) {
+        EXPECT_EQ(deep[i].record.pixel, m.candidates()[i].record.pixel);
+        EXPECT_EQ(deep[i].record.sampleIndex, m.candidates()[i].record.sampleIndex);
+        EXPECT_EQ(deep[i].weight, m.candidates()[i].weight);
+    }
+}
+
+// §2.4: long-chain starts are drawn with probability w_i / W (independently per task, stratified within
+// one); burst starts
+// of one pixel with probability w_i / W_p, each with weight W_p / C (§5.3). Pearson's chi-square over the
+// candidates (cells with small expectations pooled).
+TEST_P(Seeding, ResamplingIsProportionalToWeight) {
+    auto scene = loadChainTestScene(GetParam(), 8);
+    const auto pssmlt = makeTestIntegrator(*scene, "pssmlt", {{"directSamples", "-1"}, {"luminanceSamples", "256"}});
+    const Normalizer n = seedAll(*scene, asPSS(*pssmlt).seeding(*scene), kSeed);
+    const auto &pool = n.candidates();
+    ASSERT_GT(pool.size(), 50u);
+    const auto indexOf = [&](const PathRecord &r) {
+        for (size_t i = 0; i < pool.size(); ++i)
+            if (pool[i].record.pixel == r.pixel && pool[i].record.sampleIndex == r.sampleIndex &&
+                pool[i].record.s == r.s && pool[i].record.t == r.t)
+                return i;
+        ADD_FAILURE() << "resampled a record that is not in the pool";
+        return size_t(0);
+    };
+    // One chain per task (independent draws), and ten per task (stratified within the task).
+    constexpr int kDraws = 100000;
+    std::vector<double> observed(pool.size(), 0.0), expected(pool.size());
+    for (size_t i = 0; i < pool.size(); ++i) expected[i] = kDraws * pool[i].weight / n.luminance();
+    for (uint64_t perTask : {1, 10}) {
+        std::fill(observed.begin(), observed.end(), 0.0);
+        for (uint64_t k = 0; k < kDraws / perTask; ++k) {
+            const std::vector<ChainSeed> seeds = n.resample(kSeed, k, perTask);
+            ASSERT_EQ(seeds.size(), perTask);
+            for (const ChainSeed &s : seeds) {
+                EXPECT_EQ(s.weight, 1.0);
+                observed[indexOf(s.record)] += 1;
+            }
+        }
+        const Chi2Result global = chi2Histogram(observed, expected, 0.01, 3);
+        EXPECT_TRUE(global.passed) << perTask << " per task: " << global.report;
+    }
+
+    // The pixel with the largest pool.
+    std::map<uint64_t, size_t> sizes;
+    for (const SeedCandidate &c : pool) ++sizes[c.record.pixel];
+    const uint64_t pixel =
+        std::max_element(sizes.begin(), sizes.end(), [](auto &a, auto &b) { return a.second < b.second; })->first;
+    ASSERT_GT(sizes[pixel], 5u);
+    const std::vector<ChainSeed> seeds = n.resamplePixel(kSeed, pixel, kDraws);
+    ASSERT_EQ(seeds.size(), static_cast<size_t>(kDraws));
+    std::fill(observed.begin(), observed.end(), 0.0);
+    std::fill(expected.begin(), expected.end(), 0.0);
+    const double W = n.pixelLuminance(pixel);
+    for (const ChainSeed &s : seeds) {
+        EXPECT_DOUBLE_EQ(s.weight, W / kDraws);
+        observed[indexOf(s.record)] += 1;
+    }
+    for (size_t i = 0; i < pool.size(); ++i)
+        if (pool[i].record.pixel == pixel) expected[i] = kDraws * pool[i].weight / W;
+    std::vector<double> o, e;
+    for (size_t i = 0; i < pool.size(); ++i)
+        if (expected[i] > 0 || observed[i] > 0) {
+            o.push_back(observed[i]);
+            e.push_back(expected[i]);
+        }
+    const Chi2Result perPixel = chi2Histogram(o, e, 0.01, 3);
+    EXPECT_TRUE(perPixel.passed) << perPixel.report;
+    EXPECT_TRUE(n.resamplePixel(kSeed, filmPixel(scene->sensor().film(), 0) + 1000000, 4).empty());
+}
+
+// A chain starts on its candidate: PSSMLT's target there is the luminance of the candidate's whole BDPT
+// sample (all its strategies), MMLT's the candidate's strategy times the d + 2 strategies of its depth.
+// (Equal up to the rounding of the raster position into primary-sample coordinates.)
+TEST_P(Seeding, ChainsStartOnTheirCandidates) {
+    auto scene = loadChainTestScene(GetParam(), 16);
+    for (const std::string type : {"pssmlt", "mmlt"}) {
+        const auto integrator = makeTestIntegrator(*scene, type, {{"luminanceSamples", "1024"}});
+        const PrimarySampleIntegrator &pss = asPSS(*integrator);
+        const SeedingConfig config = pss.seeding(*scene);
+        const Normalizer n = seedAll(*scene, config, kSeed);
+        ChainTask task;
+        task.depthLuminance = n.depthLuminance();
+        ImageBlock film(0, 0, 16, 16, nullptr);
+        for (uint64_t k = 0; k < 40; ++k) {
+            const ChainSeed seed = n.resample(kSeed, k, 1)[0];
+            double expected = 0;
+            for (const SeedCandidate &c : n.candidates())
+                if (c.record.pixel == seed.record.pixel && c.record.sampleIndex == seed.record.sampleIndex &&
+                    (type == "pssmlt" || (c.record.s == seed.record.s && c.record.t == seed.record.t)))
+                    expected +=
+                        c.weight * config.samplesPerPixel * (type == "pssmlt" ? 1 : seed.record.s + seed.record.t + 1);
+            PCG32 rng(k, 1);
+            const auto started = pss.startChain(*scene, kSeed, task, seed, 1.0, rng, film);
+            EXPECT_NEAR(started.chain->target(), expected, 1e-9 * expected) << type << " chain " << k;
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, Seeding, ::testing::Values("cornell-box", "veach-mis", "veach-bidir"));
+
+}  // namespace
+}  // namespace pf::test
