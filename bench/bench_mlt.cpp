@@ -66,10 +66,12 @@ std::unique_ptr<pf::Scene> loadWithSampleCount(const std::string &path, int spp,
     return scene;
 }
 
-std::unique_ptr<pf::Integrator> makeIntegrator(const pf::Scene &scene, const std::string &type) {
+// `type` with the scene file's maxDepth and, for erpt, chainLength `chainLength` (0: the default).
+std::unique_ptr<pf::Integrator> makeIntegrator(const pf::Scene &scene, const std::string &type, int chainLength = 0) {
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
+    if (chainLength > 0) props.set("chainLength", pf::Properties::Type::Integer, int64_t(chainLength), {});
     return pf::createIntegrator(type, props, true);
 }
 
@@ -180,36 +182,45 @@ int main(int argc, char **argv) {
     const pf::Bitmap reference = render(*scene, *bdpt, o.refSpp, 0, 1000, o.threads, refStats);
     std::printf("reference: bdpt, %d spp, %.1f s\n", o.refSpp, refStats.seconds);
     if (!o.out.empty()) pf::writeEXR(o.out + "/reference.exr", reference);
-    // ERPT's seeds per pixel for S seconds, from the times of runs with 1 and 3 seeds per pixel (a fixed
-    // part, the direct component, and a part proportional to the seeds).
-    double probe[2];
-    for (int k = 0; k < 2; ++k) {
-        const auto probeScene = loadWithSampleCount(o.scene, 1 + 2 * k, o.res);
-        pf::RenderStats stats;
-        render(*probeScene, *makeIntegrator(*probeScene, "erpt"), 0, 0, 1, o.threads, stats);
-        probe[k] = stats.seconds;
-    }
-    const double perSeed = std::max(1e-9, (probe[1] - probe[0]) / 2), fixed = probe[0] - perSeed;
-    const int erptSpp = std::max(1, static_cast<int>((o.seconds - fixed) / perSeed));
-    const auto erptScene = loadWithSampleCount(o.scene, erptSpp, o.res);
-    std::printf("%-5s %4s %9s %9s %12s %16s\n", "", "run", "seconds", "budget", "relMSE", "w/o worst 0.1%");
-    for (const std::string type : {"bdpt", "mlt", "erpt"}) {
-        const pf::Scene &s = type == "erpt" ? *erptScene : *scene;
-        const auto integrator = makeIntegrator(s, type);
+    struct Method {
+        std::string label, type;
+        int chainLength;  // erpt's, 0: the default
+    };
+    std::printf("%-14s %4s %9s %9s %12s %16s\n", "", "run", "seconds", "budget", "relMSE", "w/o worst 0.1%");
+    for (const Method &m : {Method{"bdpt", "bdpt", 0}, Method{"mlt", "mlt", 0}, Method{"erpt", "erpt", 0},
+                            Method{"erpt-1000", "erpt", 1000}}) {
+        const bool timed = m.type != "erpt";
+        int seeds = 0;
+        if (!timed) {
+            // ERPT's seeds per pixel for S seconds, from the times of runs with 1 and 3 seeds per pixel (a
+            // fixed part, the direct component, and a part proportional to the seeds).
+            double probe[2];
+            for (int k = 0; k < 2; ++k) {
+                const auto probeScene = loadWithSampleCount(o.scene, 1 + 2 * k, o.res);
+                pf::RenderStats stats;
+                render(*probeScene, *makeIntegrator(*probeScene, m.type, m.chainLength), 0, 0, 1, o.threads, stats);
+                probe[k] = stats.seconds;
+            }
+            const double perSeed = std::max(1e-9, (probe[1] - probe[0]) / 2), fixed = probe[0] - perSeed;
+            seeds = std::max(1, static_cast<int>((o.seconds - fixed) / perSeed));
+        }
+        const auto methodScene = timed ? nullptr : loadWithSampleCount(o.scene, seeds, o.res);
+        const pf::Scene &s = timed ? *scene : *methodScene;
+        const auto integrator = makeIntegrator(s, m.type, m.chainLength);
         Error mean;
         for (int run = 0; run < o.runs; ++run) {
             pf::RenderStats stats;
-            const bool timed = type != "erpt";
-            const pf::Bitmap image = render(s, *integrator, timed ? 0 : erptSpp, timed ? o.seconds : 0,
-                                            static_cast<uint64_t>(run + 1), o.threads, stats);
+            const pf::Bitmap image =
+                render(s, *integrator, seeds, timed ? o.seconds : 0, static_cast<uint64_t>(run + 1), o.threads, stats);
             const Error e = relativeError(image, reference);
             mean.all += e.all / o.runs;
             mean.trimmed += e.trimmed / o.runs;
-            std::printf("%-5s %4d %9.2f %9lld %12.4g %16.4g\n", type.c_str(), run, stats.seconds,
-                        static_cast<long long>(timed ? stats.samplesPerPixel : erptSpp), e.all, e.trimmed);
-            if (run == 0 && !o.out.empty()) pf::writeEXR(o.out + "/" + type + ".exr", image);
+            std::printf("%-14s %4d %9.2f %9lld %12.4g %16.4g\n", m.label.c_str(), run, stats.seconds,
+                        static_cast<long long>(timed ? stats.samplesPerPixel : seeds), e.all, e.trimmed);
+            if (run == 0 && !o.out.empty()) pf::writeEXR(o.out + "/" + m.label + ".exr", image);
         }
-        std::printf("%-5s mean relMSE %.4g (without the worst 0.1%%: %.4g)\n", type.c_str(), mean.all, mean.trimmed);
+        std::printf("%-14s mean relMSE %.4g (without the worst 0.1%%: %.4g)\n", m.label.c_str(), mean.all,
+                    mean.trimmed);
     }
     return 0;
 }

@@ -1,4 +1,4 @@
-// Detailed balance of Veach's mutations and perturbations (Veach 1997 §11.2-11.4; ALGORITHMS.md §9.1.4, §9.4)
+// Detailed balance of Veach's mutations and perturbations (Veach 1997 ch. 11; ALGORITHMS.md §9.1.4, §9.4)
 // on the shared scenes and Veach's swimming pool, for random current paths (BDPT's, and states that chains
 // reach from them) and proposals drawn by each mutation:
 //

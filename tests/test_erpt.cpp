@@ -1,5 +1,5 @@
 // Energy redistribution path tracing (`erpt`, Cline et al. 2005; ALGORITHMS.md §5): convergence to a BDPT
-// reference, the allocation of bursts to pixels (§5.3), the parameters, and, through bursts, each of
+// reference, the allocation of bursts to seed paths (§5.3), the parameters, and, through bursts, each of
 // Veach's mutations on its own. Bursts from properly weighted seeds stay unbiased with any transition rule
 // that keeps the target's distribution, ergodic or not (§5.2), so a mutation with a wrong T ratio shows up
 // as a biased image, whichever mutation it is. Comparisons are block means of images rendered with
@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <tuple>
 
 #include "integrators/erpt.h"
 #include "render/normalizer.h"
@@ -20,9 +21,11 @@ constexpr int kRes = 16;
 
 class ERPTConvergence : public ::testing::TestWithParam<std::string> {};
 
-// Mitsuba's defaults (lens, caustic and multi-chain perturbations), every path left to the chains.
+// Mitsuba's perturbations (lens, caustic and multi-chain), every path left to the chains, bursts of 400
+// mutations (short bursts leave more of the noise of picking a few seed paths per pixel).
 TEST_P(ERPTConvergence, AgreesWithBDPT) {
-    expectConvergence(GetParam(), "erpt", {{"directSamples", "-1"}}, ConvergenceSetup{}, GetParam() + " erpt");
+    expectConvergence(GetParam(), "erpt", {{"directSamples", "-1"}, {"chainLength", "400"}}, ConvergenceSetup{},
+                      GetParam() + " erpt");
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ERPTConvergence, ::testing::Values("cornell-box", "veach-mis", "veach-bidir"),
@@ -58,9 +61,10 @@ INSTANTIATE_TEST_SUITE_P(
         return n;
     });
 
-// §5.3: pixel p starts floor(nu_p + U) chains, nu_p = numChains W_p / W (capped at maxChains), each of
-// weight W_p / nu_p, so that its bursts carry W_p in expectation; on average numChains chains per pixel.
-TEST(ERPTChains, EnergyPerPixel) {
+// §5.3, Cline's bookkeeping: a seed of weight w starts floor(nu + U) chains, nu = numChains w / W (capped at
+// maxChains), each of weight w / nu, so that its bursts carry w in expectation; on average numChains chains
+// per pixel.
+TEST(ERPTChains, EnergyPerSeed) {
     auto scene = loadMLTTestScene("cornell-box", kRes, 8);
     for (const bool capped : {false, true}) {
         const auto integrator = makeTestIntegrator(
@@ -70,34 +74,35 @@ TEST(ERPTChains, EnergyPerPixel) {
         for (const SeedingTask &t : seedingTasks(*scene))
             seeds.push_back(runSeedingTask(*scene, erpt.seeding(*scene), 5, t));
         const Normalizer normalizer(std::move(seeds));
-        const Film &film = scene->sensor().film();
         const double mean = normalizer.luminance() / (kRes * kRes);
-        std::map<uint64_t, std::vector<double>> chains;
+        std::map<std::tuple<uint64_t, uint64_t, int, int>, std::vector<double>> chains;
         for (uint64_t k = 0; k < erpt.chainTaskCount(*scene, 8); ++k) {
             const ChainTask task = erpt.chainTask(*scene, normalizer, 5, 8, k);
             EXPECT_EQ(task.mutations, 7u);
-            for (const ChainSeed &s : task.seeds) chains[s.record.pixel].push_back(s.weight);
+            for (const ChainSeed &s : task.seeds)
+                chains[{s.record.pixel, s.record.sampleIndex, s.record.s, s.record.t}].push_back(s.weight);
         }
-        double expected = 0;
-        size_t total = 0;
-        for (uint64_t i = 0; i < static_cast<uint64_t>(kRes * kRes); ++i) {
-            const uint64_t pixel = filmPixel(film, i);
-            const double w = normalizer.pixelLuminance(pixel), nu = erpt.expectedChains(w, mean);
-            if (!(w > 0)) {
-                EXPECT_EQ(chains.count(pixel), 0u);
-                continue;
+        double expected = 0, variance = 0;
+        size_t total = 0, matched = 0;
+        for (const auto &[record, weights] : chains) total += weights.size();
+        for (const SeedCandidate &c : normalizer.candidates()) {
+            const double nu = erpt.expectedChains(c.weight, mean);
+            EXPECT_NEAR(nu, capped ? std::min(3.0, 2.5 * c.weight / mean) : 2.5 * c.weight / mean, 1e-12 * nu);
+            const auto it = chains.find({c.record.pixel, c.record.sampleIndex, c.record.s, c.record.t});
+            const size_t count = it == chains.end() ? 0 : it->second.size();
+            EXPECT_TRUE(count == static_cast<size_t>(std::floor(nu)) ||
+                        count == static_cast<size_t>(std::floor(nu)) + 1)
+                << count << " chains for nu = " << nu;
+            if (it != chains.end()) {
+                for (const double weight : it->second) EXPECT_NEAR(weight, c.weight / nu, 1e-12 * c.weight / nu);
             }
-            EXPECT_NEAR(nu, capped ? std::min(3.0, 2.5 * w / mean) : 2.5 * w / mean, 1e-12 * nu);
-            const std::vector<double> &weights = chains[pixel];
-            EXPECT_TRUE(weights.size() == static_cast<size_t>(std::floor(nu)) ||
-                        weights.size() == static_cast<size_t>(std::floor(nu)) + 1)
-                << "pixel " << pixel << ": " << weights.size() << " chains for nu = " << nu;
-            for (const double weight : weights) EXPECT_NEAR(weight, w / nu, 1e-12 * w / nu);
             expected += nu;
-            total += weights.size();
+            variance += (nu - std::floor(nu)) * (1 - (nu - std::floor(nu)));
+            matched += count;
         }
-        // The rounding is unbiased: the total is within a few standard deviations (at most 1/2 per pixel).
-        EXPECT_NEAR(static_cast<double>(total), expected, 4 * 0.5 * kRes);
+        EXPECT_EQ(matched, total) << "chains start only from seeding candidates";
+        // The rounding is unbiased: the total lies within 4 standard deviations of its expectation.
+        EXPECT_NEAR(static_cast<double>(total), expected, 4 * std::sqrt(variance));
         if (!capped) {
             EXPECT_NEAR(expected, 2.5 * kRes * kRes, 1e-9 * expected);
         }

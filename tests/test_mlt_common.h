@@ -18,7 +18,7 @@
 
 namespace pf::test {
 
-// Veach's swimming pool (Veach 1997 fig. 11.4): a diffuse floor under a water surface, lit from above.
+// Veach's swimming pool (Veach & Guibas 1997): a diffuse floor under a water surface, lit from above.
 // Seen from above ("pool"), its light paths L S D S E cross two specular chains: the multi-chain
 // perturbation's case. Seen from under water ("pool-underwater"), the floor shows the caustic L S D E: the
 // caustic perturbation's case, through a Dirac refraction.
@@ -111,7 +111,7 @@ inline const BlockStats &bdptReference(const std::string &name, const Scene &sce
 // thresholds (in standard errors, and the largest median block error and image error that still allow a
 // meaningful comparison).
 struct ConvergenceSetup {
-    int res = 16, block = 8, seeds = 16, referenceSpp = 64, budget = 8;
+    int res = 16, block = 8, seeds = 16, referenceSpp = 64, budget = 32;
     double sigmas = 4.5, maxMedianError = 0.05, maxImageError = 0.03;
 };
 
@@ -122,18 +122,18 @@ inline void expectConvergence(const std::string &name, const std::string &type,
     const bool bursts = type == "erpt";
     auto scene = loadMLTTestScene(name, s.res, bursts ? s.budget : 4);
     const auto integrator = makeTestIntegrator(*scene, type, params);
-    const BlockStats chains = blockStats(*scene, *integrator, s.block, s.seeds, bursts ? 0 : s.budget, getenv("DIAG_SEED") ? std::stoull(getenv("DIAG_SEED")) : 2);
+    const BlockStats chains = blockStats(*scene, *integrator, s.block, s.seeds, bursts ? 0 : s.budget, 2);
     expectBlocksAgree(bdptReference(name, *scene, s.block, s.seeds, s.referenceSpp), chains, s.sigmas, s.maxMedianError,
                       s.maxImageError, what);
 }
 
 // ERPT with the single mutation `type` agrees with BDPT, and that mutation is accepted often enough to have
-// shown a bias (a mutation that never moves cannot bias anything).
+// shown a bias (a mutation that never moves cannot bias anything): in at least 2% of its proposals.
 inline void expectSingleMutationConvergence(const std::string &name, MutationType type, const ConvergenceSetup &s) {
     auto scene = loadMLTTestScene(name, s.res, s.budget);
     for (const MutationCount &count : mutationCounts(*scene, *makeTestIntegrator(*scene, "erpt", singleMutation(type))))
         if (count.name == mutationName(type)) {
-            EXPECT_GT(count.accepted, count.proposed / 10) << count.name << " is hardly ever accepted";
+            EXPECT_GT(count.accepted, count.proposed / 50) << count.name << " is hardly ever accepted";
         }
     expectConvergence(name, "erpt", singleMutation(type), s, name + " " + mutationName(type));
 }

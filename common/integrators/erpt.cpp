@@ -1,5 +1,6 @@
 #include "integrators/erpt.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "render/normalizer.h"
@@ -9,7 +10,7 @@ namespace pf {
 
 namespace {
 
-// The stream of the per-pixel rounding of chain counts, apart from every other generator of the job.
+// The stream of the rounding of chain counts, apart from every other generator of the job.
 constexpr uint64_t kChainCountStream = 0xe127ULL;
 
 // The crop window split into a fixed number of pixel blocks (16, or fewer for tiny films, more for large
@@ -40,8 +41,8 @@ ERPT::ERPT(const Properties &props)
 
 SeedingConfig ERPT::seeding(const Scene &scene) const { return seedingWith(scene.sensor().sampleCount()); }
 
-double ERPT::expectedChains(double pixelLuminance, double meanLuminance) const {
-    const double nu = numChains_ * pixelLuminance / meanLuminance;
+double ERPT::expectedChains(double candidateWeight, double meanLuminance) const {
+    const double nu = numChains_ * candidateWeight / meanLuminance;
     return maxChains_ > 0 ? std::min(nu, static_cast<double>(maxChains_)) : nu;
 }
 
@@ -65,17 +66,19 @@ ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint
     // A time budget asks for tasks beyond the last block: the bursts of every pixel are all there is (the
     // films are summed, so a second pass would count twice), and those tasks are empty.
     if (index >= blocks) return task;
-    for (uint64_t i = index * pixels / blocks; i < (index + 1) * pixels / blocks; ++i) {
-        const uint64_t pixel = filmPixel(film, i);
-        const double luminance = normalizer.pixelLuminance(pixel);
-        if (!(luminance > 0)) continue;
-        const double nu = expectedChains(luminance, mean);
-        PCG32 rng(hashCombine(seed, pixel), kChainCountStream);
+    // The candidates that the block's pixels generated (the pool is in pixel order).
+    const std::vector<SeedCandidate> &pool = normalizer.candidates();
+    const uint64_t first = filmPixel(film, index * pixels / blocks),
+                   last = filmPixel(film, (index + 1) * pixels / blocks - 1);
+    const auto begin =
+        std::partition_point(pool.begin(), pool.end(), [&](const SeedCandidate &c) { return c.record.pixel < first; });
+    const auto end =
+        std::partition_point(begin, pool.end(), [&](const SeedCandidate &c) { return c.record.pixel <= last; });
+    PCG32 rng(hashCombine(seed, index), kChainCountStream);
+    for (auto c = begin; c != end; ++c) {
+        const double nu = expectedChains(c->weight, mean);
         const int chains = static_cast<int>(std::floor(nu + rng.nextDouble()));
-        for (ChainSeed s : normalizer.resamplePixel(seed, pixel, chains)) {
-            s.weight = luminance / nu;
-            task.seeds.push_back(s);
-        }
+        for (int k = 0; k < chains; ++k) task.seeds.push_back({c->record, c->weight / nu});
     }
     return task;
 }

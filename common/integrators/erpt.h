@@ -1,20 +1,22 @@
 // Energy redistribution path tracing (`erpt`; Cline et al. 2005; ALGORITHMS.md §5) seeded by BDPT, as in
-// Jakob's variant ([TH 8]): every pixel's BDPT samples form a pool of seed paths, each pixel launches
-// short bursts of chainLength mutations from paths resampled from its pool, using Veach's lens, caustic
-// and multi-chain perturbations only, and no post-processing filter (Cline's filters are biased). Bursts
-// need no ergodicity: the weighted seeds represent the image already, and each perturbation keeps that
-// distribution (ALGORITHMS.md §5.2, §2.4).
+// Jakob's variant ([TH 8]): every pixel's BDPT samples give seed paths with their weights, which launch
+// short bursts of chainLength mutations using Veach's lens, caustic and multi-chain perturbations only,
+// and no post-processing filter (Cline's filters are biased). Bursts need no ergodicity: the weighted seeds
+// represent the image already, and each perturbation keeps that distribution (ALGORITHMS.md §5.2, §2.4).
 //
-// Energy per deposit (ALGORITHMS.md §5.3): pixel p, with luminance estimate W_p from its pool, launches
-// numChains * W_p / W chains on average (W the mean pixel luminance, b̂ / pixels; at most maxChains when
-// that is positive): floor(nu_p + U) chains with U uniform, each of weight W_p / nu_p, so every
-// deposit carries W / (numChains * chainLength) as in Cline's equal-energy scheme, and the pixel's
-// expected total stays W_p whatever the rounding and the cap. The bursts' films are summed.
+// Energy per deposit (ALGORITHMS.md §5.3, Cline's bookkeeping): a seed of weight w launches
+// nu = numChains * w / W chains on average (W the mean pixel luminance, b̂ / pixels; nu at most maxChains
+// when that is positive), floor(nu + U) with U uniform, each of weight w / nu. Every deposit then carries
+// W / (numChains * chainLength) (more where the cap applies), on average numChains chains start per pixel,
+// and each seed's expected total stays w. Seeds launch their own chains rather than drawing them from their
+// pixel's pool: a pixel's pool also holds the light-tracing paths its samples splatted elsewhere, and a
+// burst resampled from it would carry the whole pixel's energy to wherever such a path lands. The bursts'
+// films are summed.
 //
 // Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
-// numChains (1), maxChains (0: no cap), chainLength (100), lensPerturbation (true), causticPerturbation
-// (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation (false),
-// manifoldPerturbation (false; rejected when true: it arrives with manifold exploration), lambda (50),
+// numChains (1), maxChains (0: no cap on the chains of one seed), chainLength (100), lensPerturbation (true),
+// causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
+// (false), manifoldPerturbation (false; rejected when true: it arrives with manifold exploration), lambda (50),
 // luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
 // see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel, taken from the scene's
 // sampleCount (see seeding()).
@@ -37,9 +39,9 @@ public:
     ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                         uint64_t index) const override;
 
-    // The expected number of chains nu_p of a pixel with luminance estimate `pixelLuminance` when the mean
-    // pixel luminance is `meanLuminance`.
-    double expectedChains(double pixelLuminance, double meanLuminance) const;
+    // The expected number of chains nu of a seed of weight `candidateWeight` when the mean pixel luminance
+    // is `meanLuminance`.
+    double expectedChains(double candidateWeight, double meanLuminance) const;
 
 private:
     double numChains_ = 1;

@@ -1,4 +1,4 @@
-// Veach's bidirectional mutation (Veach & Guibas 1997 §5.1; Veach 1997 §11.4.2; ALGORITHMS.md §4.1-4.2):
+// Veach's bidirectional mutation (Veach & Guibas 1997; Veach 1997 ch. 11; ALGORITHMS.md §4.1-4.2):
 // deletes a subpath x_{l+1} .. x_{m-1} and regenerates it, possibly with another number of vertices, by
 // extending the kept prefix with s steps of the emitter walk and the kept suffix with t steps of the
 // sensor walk and connecting the two (BDPT's building blocks). It changes the path's length and structure

@@ -1,4 +1,4 @@
-// Veach's caustic perturbation (Veach & Guibas 1997 §5.3.2; Veach 1997 §11.4.3; ALGORITHMS.md §4.1-4.2): the
+// Veach's caustic perturbation (Veach & Guibas 1997; Veach 1997 ch. 11; ALGORITHMS.md §4.1-4.2): the
 // lens perturbation run from the light side, for paths whose vertex x_{n-2} next to the camera is
 // non-specular and is reached from the previous non-specular vertex x_a through a (possibly empty) chain of
 // specular vertices (caustics seen directly, ...D S* D E). The direction leaving x_a is perturbed by an

@@ -1,4 +1,4 @@
-// Veach's lens perturbation (Veach & Guibas 1997 §5.3.1; Veach 1997 §11.4.3; ALGORITHMS.md §4.1-4.2): for a
+// Veach's lens perturbation (Veach & Guibas 1997; Veach 1997 ch. 11; ALGORITHMS.md §4.1-4.2): for a
 // path whose first non-specular vertex x_b seen from the camera is followed by another non-specular vertex
 // (the form ...DD S* E), move the raster position by an image-plane offset with density proportional to
 // 1 / r on [r1, r2], trace the new camera ray through the same specular chain to a new x_b, and connect it

@@ -1,4 +1,4 @@
-// Veach's lens subpath mutation (Veach & Guibas 1997 §5.2; Veach 1997 §11.4.3): replaces the lens subpath
+// Veach's lens subpath mutation (Veach & Guibas 1997; Veach 1997 ch. 11): replaces the lens subpath
 // of the form [^S]S*E, the camera end of the path up to and including its first non-specular vertex x_b,
 // by a new one. A new sensor walk starts at a uniformly chosen raster position (Veach stratifies these
 // over the image; independent positions keep the chain's tasks independent of each other), crosses as many

@@ -1,4 +1,4 @@
-// Veach's multi-chain perturbation (Veach & Guibas 1997 §5.3.3; Veach 1997 §11.4.4; ALGORITHMS.md §4.1-4.2):
+// Veach's multi-chain perturbation (Veach & Guibas 1997; Veach 1997 ch. 11; ALGORITHMS.md §4.1-4.2):
 // for paths whose camera side crosses several specular chains before an edge with two non-specular ends
 // (the swimming pool, ...DS+DS+E), a lens perturbation of the first chain followed by a cascade: at each
 // further non-specular vertex the direction towards the next chain is perturbed by an angle with density

@@ -11,7 +11,7 @@
 // Dirac vertex with the emitter walk converts its density with importanceToCanonical(): the ratio of
 // the vertex's two terms of f is the ratio of the two measures there, since f dmu is the same measure of
 // light transport whichever walk describes it. f(y) / T(x -> y) is then the same weight that a walk
-// computes (Veach 1997 §11.3.3 writes the acceptance with these weights), whatever measure the walk used.
+// computes (Veach 1997 ch. 11 writes the acceptance with these weights), whatever measure the walk used.
 //
 // Mutations are selected per step with probability proportional to their applicability (Veach 1997
 // §11.4; Mitsuba calls it suitability), which depends on the state, so MutationSet folds the selection

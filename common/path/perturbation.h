@@ -1,4 +1,4 @@
-// What Veach's perturbations share (Veach & Guibas 1997 §5.3; Veach 1997 §11.4.3-11.4.4; ALGORITHMS.md
+// What Veach's perturbations share (Veach & Guibas 1997; Veach 1997 ch. 11; ALGORITHMS.md
 // §4.1-4.2): the truncated reciprocal kernels that choose their step sizes, the sizes themselves, and
 // the propagation of a perturbed direction through a chain of ideal specular vertices, keeping each one's
 // lobe. Perturbations keep the path's configuration (its length and its sequence of specular and
@@ -32,7 +32,7 @@ private:
     double lo_, hi_, logRatio_;
 };
 
-// Veach's step sizes (Veach 1997 §11.4.3): image-plane offsets from r1 = 0.1 pixel to the radius r2 of a
+// Veach's step sizes (Veach 1997 ch. 11): image-plane offsets from r1 = 0.1 pixel to the radius r2 of a
 // disk covering 5% of the image (Mitsuba's minJump and coveredArea), and the angle one pixel subtends at
 // the camera, which converts them into angles.
 struct PerturbationScale {
@@ -64,7 +64,7 @@ bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const P
 // probability 1, since propagation keeps their lobe (the pseudo-measure of mutation.h).
 double propagationJacobian(const PathView &y, int from, int to, TransportMode mode);
 
-// The structure the lens and multi-chain perturbations act on (Veach 1997 §11.4.4): read from the sensor,
+// The structure the lens and multi-chain perturbations act on (Veach 1997 ch. 11): read from the sensor,
 // the first edge x_{b-1} x_b with two non-specular ends (b = 0: x_0 is an area emitter that a perturbed
 // ray can land on), and the number of specular chains crossed before it (1: x_b is the first non-specular
 // vertex, the lens perturbation's case; more: the multi-chain perturbation's). chains = 0 when there is no
