@@ -43,7 +43,7 @@ void throughput(const pf::Scene &scene, const pf::ChainIntegrator &integrator, i
         seeds.push_back(pf::runSeedingTask(scene, integrator.seeding(scene), 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
     const double seeding = secondsSince(start);
-    pf::ChainImage image{pf::makeFilmBlock(scene), 0, {}, 0, 0};
+    pf::ChainImage image(pf::makeFilmBlock(scene));
     start = std::chrono::steady_clock::now();
     for (uint64_t i = 0; i < integrator.chainTaskCount(scene, mpp); ++i)
         pf::mergeChainResult(

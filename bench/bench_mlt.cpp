@@ -86,7 +86,7 @@ pf::ChainImage runChains(const pf::Scene &scene, const pf::ChainIntegrator &inte
     for (const pf::SeedingTask &t : pf::seedingTasks(scene))
         seeds.push_back(pf::runSeedingTask(scene, integrator.seeding(scene), 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
-    pf::ChainImage image{pf::makeFilmBlock(scene), 0, {}, 0, 0};
+    pf::ChainImage image(pf::makeFilmBlock(scene));
     const auto start = std::chrono::steady_clock::now();
     for (uint64_t i = 0; i < integrator.chainTaskCount(scene, spp); ++i)
         pf::mergeChainResult(

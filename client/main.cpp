@@ -65,6 +65,12 @@ int runRender(const RenderArgs &a) {
                 a.scene.c_str(), image.width, image.height, static_cast<long long>(stats.samplesPerPixel),
                 integrator->name().c_str(), stats.seconds, loadSeconds, stats.samples / secs, stats.rays / secs,
                 opt.threads, exr.string().c_str());
+    // Markov-chain renders: acceptance per mutation type, then the chains' further statistics.
+    for (const pf::MutationCount &c : stats.counts)
+        if (c.proposed > 0)
+            std::printf("  %-14s %12llu proposed, %5.1f%% accepted\n", c.name.c_str(),
+                        static_cast<unsigned long long>(c.proposed), 100.0 * c.accepted / c.proposed);
+    for (const pf::ChainCounter &c : stats.counters) std::printf("  %-24s %.6g\n", c.name.c_str(), c.value);
     return 0;
 }
 

@@ -148,11 +148,11 @@ TEST(ChainTask, MergeRules) {
     auto scene = loadChainTestScene("cornell-box", 4);
     const Film &film = scene->sensor().film();
     const auto result = [&](double value, uint64_t mutations) {
-        ChainResult r{makeFilmBlock(*scene), mutations, {{"a", mutations, mutations / 2}}, 0, 1.0};
+        ChainResult r{makeFilmBlock(*scene), mutations, {{"a", mutations, mutations / 2}}, {}, 0, 1.0};
         r.film.splat(Vec2(1.5, 2.5), Spectrum(value));
         return r;
     };
-    ChainImage image{makeFilmBlock(*scene), 0, {}, 0, 0};
+    ChainImage image(makeFilmBlock(*scene));
     mergeChainResult(image, result(3.0, 100));
     mergeChainResult(image, result(5.0, 300));
     EXPECT_EQ(image.mutations, 400u);
@@ -164,7 +164,7 @@ TEST(ChainTask, MergeRules) {
     EXPECT_FLOAT_EQ(longChains.get(1, 2).r, static_cast<float>(2.0 * 8.0 / 400.0));
     EXPECT_EQ(longChains.get(2, 1).r, 0.0f);
     EXPECT_FLOAT_EQ(developChains(film, image, ChainKind::Burst, 2.0).get(1, 2).g, 8.0f);
-    ChainImage empty{makeFilmBlock(*scene), 0, {}, 0, 0};
+    ChainImage empty(makeFilmBlock(*scene));
     EXPECT_EQ(developChains(film, empty, ChainKind::Long, 2.0).get(1, 2).b, 0.0f);
 
     const ChainSeed burst{{}, 0.5};

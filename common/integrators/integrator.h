@@ -11,6 +11,7 @@
 #include "core/sampler.h"
 #include "core/spectrum.h"
 #include "image/bitmap.h"
+#include "mcmc/metropolis.h"
 #include "scene/properties.h"
 
 namespace pf {
@@ -34,6 +35,9 @@ struct RenderStats {
     int64_t samplesPerPixel = 0;
     uint64_t samples = 0;      // camera samples (pixel samples) taken
     uint64_t rays = 0;         // intersect + occluded queries
+    // Markov-chain renders: transitions per mutation type and the chains' further statistics.
+    MutationCounts counts;
+    ChainCounters counters;
 };
 
 class Integrator {

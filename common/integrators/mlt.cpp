@@ -82,7 +82,8 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
 }
 
 void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
-                                   double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts) const {
+                                   double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts,
+                  ChainCounters &) const {
     // The chain starts on the resampled candidate itself (ALGORITHMS.md §2.4), regenerated from its record.
     MutablePath start;
     bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });

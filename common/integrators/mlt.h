@@ -38,7 +38,8 @@ class PathSpaceIntegrator : public ChainIntegrator {
 public:
     MutationCounts mutationTypes() const override { return PathChain::mutationTypes(types_); }
     void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed, double scale,
-                  PCG32 &rng, ImageBlock &film, MutationCounts &counts) const override;
+                  PCG32 &rng, ImageBlock &film, MutationCounts &counts,
+                  ChainCounters &counters) const override;
     const SamplingIntegrator *directIntegrator() const override { return direct_.get(); }
     int64_t directSamples() const override { return directSamples_; }
 

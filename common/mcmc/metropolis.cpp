@@ -11,6 +11,20 @@ double acceptance(double currentTarget, const Proposal &proposal) {
     return std::isnan(ratio) ? 0.0 : std::min(1.0, ratio);
 }
 
+void addCounters(ChainCounters &into, const ChainCounters &from) {
+    for (const ChainCounter &c : from) {
+        ChainCounter &x = counter(into, c.name, c.merge);
+        x.value = c.merge == ChainCounter::Merge::Max ? std::max(x.value, c.value) : x.value + c.value;
+    }
+}
+
+ChainCounter &counter(ChainCounters &counters, const std::string &name, ChainCounter::Merge merge) {
+    const auto it =
+        std::find_if(counters.begin(), counters.end(), [&](const ChainCounter &x) { return x.name == name; });
+    if (it != counters.end()) return *it;
+    return counters.emplace_back(ChainCounter{name, 0.0, merge});
+}
+
 void addCounts(MutationCounts &into, const MutationCounts &from) {
     for (const MutationCount &c : from) {
         const auto it =

@@ -42,6 +42,22 @@ using MutationCounts = std::vector<MutationCount>;
 // Adds `from` into `into`, matching types by name (appending those `into` lacks).
 void addCounts(MutationCounts &into, const MutationCounts &from);
 
+// Further statistics of a chain, by name (the manifold walks of ALGORITHMS.md §5.5 Table 1: walks,
+// walks converged, Newton iterations, manifold sizes, ...). Chains report sums, which merge by adding, or
+// maxima, which merge by taking the larger; means are ratios of two sums taken when they are reported.
+struct ChainCounter {
+    enum class Merge { Sum, Max };
+    std::string name;
+    double value = 0;
+    Merge merge = Merge::Sum;
+};
+using ChainCounters = std::vector<ChainCounter>;
+// Merges `from` into `into`, matching counters by name (appending those `into` lacks).
+void addCounters(ChainCounters &into, const ChainCounters &from);
+// The counter `name` of `counters`, appended with value 0 if absent.
+ChainCounter &counter(ChainCounters &counters, const std::string &name,
+                      ChainCounter::Merge merge = ChainCounter::Merge::Sum);
+
 class MarkovChain {
 public:
     virtual ~MarkovChain() = default;

@@ -75,7 +75,8 @@ PrimarySampleIntegrator::StartedChain PrimarySampleIntegrator::startChain(const 
 
 void PrimarySampleIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task,
                                        const ChainSeed &seed, double scale, PCG32 &rng, ImageBlock &film,
-                                       MutationCounts &counts) const {
+                                       MutationCounts &counts,
+                  ChainCounters &) const {
     const StartedChain s = startChain(scene, jobSeed, task, seed, scale, rng, film);
     runMetropolis(*s.chain, task.mutations, rng, s.kelemen ? &*s.kelemen : nullptr, counts);
 }

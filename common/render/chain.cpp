@@ -48,11 +48,11 @@ void parallelFor(size_t n, int threads, const Fn &fn) {
 ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task) {
     const auto start = Clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
-    ChainResult result{makeFilmBlock(scene), 0, integrator.mutationTypes(), 0, 0};
+    ChainResult result{makeFilmBlock(scene), 0, integrator.mutationTypes(), {}, 0, 0};
     PCG32 rng(hashCombine(seed, task.index), kChainStream);
     for (const ChainSeed &s : task.seeds)
         integrator.runChain(scene, seed, task, s, chainDepositScale(integrator.chainKind(), s, task.mutations), rng,
-                            result.film, result.counts);
+                            result.film, result.counts, result.counters);
     result.mutations = task.mutations * task.seeds.size();
     result.rays = Scene::threadRayCount() - rays0;
     result.seconds = secondsSince(start);
@@ -112,7 +112,7 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
     const bool timed = opt.timeLimit > 0;
     const int64_t spp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
     const uint64_t count = normalizer.luminance() > 0 ? (timed ? UINT64_MAX : chainTaskCount(scene, spp)) : 0;
-    ChainImage image{makeFilmBlock(scene), 0, {}, 0, 0};
+    ChainImage image(makeFilmBlock(scene));
     const auto develop = [&]() {
         Bitmap img = developChains(film, image, chainKind(), normalizer.luminance());
         if (direct)
@@ -135,6 +135,8 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
     }
     stats.rays += image.rays;
     stats.samples = image.mutations;
+    stats.counts = image.counts;
+    stats.counters = image.counters;
     stats.samplesPerPixel = static_cast<int64_t>(image.mutations / cropPixels(scene));
     stats.seconds = secondsSince(start);
     return develop();

@@ -40,6 +40,7 @@ struct ChainResult {
     ImageBlock film;  // unnormalized deposits (splats) over the crop window
     uint64_t mutations = 0;
     MutationCounts counts;
+    ChainCounters counters;  // further statistics (mcmc/metropolis.h), e.g. the manifold walks
     uint64_t rays = 0;
     double seconds = 0;
 };
@@ -56,9 +57,11 @@ public:
     // The mutation types of this algorithm's chains, with zero counts, in MutationCount index order.
     virtual MutationCounts mutationTypes() const = 0;
     // Runs one chain of task.mutations steps from `seed`, drawing from `rng`, and deposits into `film` with
-    // its deposits multiplied by `scale`.
+    // its deposits multiplied by `scale`, counting its transitions in `counts` and anything else it
+    // measures in `counters`.
     virtual void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
-                          double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts) const = 0;
+                          double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts,
+                  ChainCounters &counters) const = 0;
     // The component rendered without chains (Mitsuba's directSamples), its samples per pixel; null if none.
     virtual const SamplingIntegrator *directIntegrator() const { return nullptr; }
     virtual int64_t directSamples() const { return 0; }

@@ -83,6 +83,7 @@ void mergeChainResult(ChainImage &image, const ChainResult &result) {
     image.film.merge(result.film);
     image.mutations += result.mutations;
     addCounts(image.counts, result.counts);
+    addCounters(image.counters, result.counters);
     image.rays += result.rays;
     image.seconds += result.seconds;
 }

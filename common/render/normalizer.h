@@ -13,6 +13,7 @@
 // summed.
 #pragma once
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "render/chain.h"
@@ -53,9 +54,11 @@ private:
 
 // The merged chain films of a render (or of a farm job so far).
 struct ChainImage {
+    explicit ChainImage(ImageBlock empty) : film(std::move(empty)) {}
     ImageBlock film;
     uint64_t mutations = 0;
     MutationCounts counts;
+    ChainCounters counters;
     uint64_t rays = 0;
     double seconds = 0;  // summed over tasks (core seconds)
 };
