@@ -421,27 +421,66 @@ TEST(ImageBlock, InvalidSamplesAreCountedNotStored) {
     EXPECT_EQ(total.invalidSamples(), 6u);
 }
 
-TEST(ImageBlock, SplatsBypassTheFilterAndScaleOnDevelop) {
-    const auto film = Film::create(4, 3, std::make_shared<GaussianFilter>());
+TEST(ImageBlock, SplatsAreFilteredKeptApartAndScaledOnDevelop) {
+    const auto film = Film::create(4, 3, std::make_shared<TentFilter>());
     ImageBlock block(0, 0, 4, 3, &film->filter());
     block.put(Vec2(1.2, 0.9), Spectrum(1.0, 2.0, 3.0));
-    block.splat(Vec2(2.7, 1.2), Spectrum(8.0));
-    block.splat(Vec2(2.0, 1.999), Spectrum(4.0));
-    EXPECT_EQ(block.splatSum(2, 1).r, 12.0);
+    block.splat(Vec2(2.5, 1.5), Spectrum(8.0));  // a pixel centre: only that pixel, with weight 1
+    block.splat(Vec2(2.0, 1.5), Spectrum(4.0));  // between pixels 1 and 2: half to each
+    EXPECT_EQ(block.splatSum(2, 1).r, 10.0);
+    EXPECT_EQ(block.splatSum(1, 1).r, 2.0);
+    EXPECT_EQ(block.weight(2, 1), 0.0);  // splats carry no filter weight
     const Bitmap img = film->develop(block, 0.25);
     EXPECT_FLOAT_EQ(img.get(0, 0).g, 2.0f);
-    // Pixel (2, 1) has filtered weight from the put as well; the splat adds 0.25 * 12 on top.
-    EXPECT_FLOAT_EQ(img.get(2, 1).b, 3.0f + 3.0f);
+    // Pixel (1, 1) is at the film's left and top border only through its filter footprint: the tent's
+    // coverage is 1 for interior pixels of a row and 7/8 for the end pixels.
+    const std::vector<double> cx = filterCoverage(film->filter(), 4), cy = filterCoverage(film->filter(), 3);
+    EXPECT_NEAR(cx[0], 0.875, 1e-12);
+    EXPECT_NEAR(cx[1], 1.0, 1e-12);
+    EXPECT_NEAR(cy[1], 1.0, 1e-12);
     const Bitmap noSplat = film->develop(block, 0.0);
-    EXPECT_FLOAT_EQ(noSplat.get(2, 1).b, 3.0f);
-
-    ImageBlock empty(0, 0, 4, 3, &film->filter());
-    empty.splat(Vec2(1.5, 1.5), Spectrum(2.0));
-    const Bitmap e = film->develop(empty, 0.5);
-    EXPECT_EQ(e.get(1, 1).r, 1.0f);  // no filtered samples: only the splat
-    EXPECT_EQ(e.get(0, 0).r, 0.0f);
+    EXPECT_NEAR(img.get(2, 1).b - noSplat.get(2, 1).b, 0.25 * 10.0, 1e-6);
+    EXPECT_NEAR(img.get(1, 1).r - noSplat.get(1, 1).r, 0.25 * 2.0, 1e-6);
     ImageBlock small(0, 0, 3, 3, &film->filter());
     EXPECT_THROW(film->develop(small, 1.0), std::invalid_argument);
+}
+
+TEST(Film, FilterCoverageIsTheFilterIntegralOverTheRow) {
+    const BoxFilter box;
+    for (double c : filterCoverage(box, 5)) EXPECT_NEAR(c, 1.0, 1e-12);
+    // Mitsuba's gaussian (stddev 0.5): exp(-2 x^2) - exp(-8) on [-2, 2].
+    const GaussianFilter g;
+    const double full = std::sqrt(M_PI / 2) * std::erf(2 * std::sqrt(2.0)) - 4 * std::exp(-8.0);
+    const std::vector<double> c = filterCoverage(g, 9);
+    EXPECT_NEAR(c[4], full, 1e-9);
+    // The end pixel keeps the half of the footprint inside the row, plus the half pixel before its centre.
+    const double half = std::sqrt(M_PI / 2) * std::erf(2 * std::sqrt(2.0)) / 2 - 2 * std::exp(-8.0);
+    const double inner = std::sqrt(M_PI / 2) * std::erf(std::sqrt(2.0) * 0.5) / 2 - 0.5 * std::exp(-8.0);
+    EXPECT_NEAR(c[0], half + inner, 1e-9);
+    EXPECT_NEAR(c[8], c[0], 1e-12);
+}
+
+// Splats and filtered samples of the same function develop to the same image: the camera image's weighted
+// average and the splat image divided by the filter's coverage both converge to int f L / int f, at an edge
+// of L and at the border of the film. Stratified deterministic positions stand in for the estimators.
+TEST(Film, SplatsAndFilteredSamplesDevelopToTheSameImage) {
+    for (const auto &filter : std::vector<std::shared_ptr<ReconstructionFilter>>{
+             std::make_shared<TentFilter>(), std::make_shared<GaussianFilter>(),
+             std::make_shared<MitchellNetravaliFilter>()}) {
+        const int W = 6, H = 5, K = 32;
+        const auto film = Film::create(W, H, filter);
+        ImageBlock put(0, 0, W, H, &film->filter()), splat(0, 0, W, H, &film->filter());
+        const auto L = [](const Vec2 &p) { return p.x < 2.3 ? Spectrum(4.0) : Spectrum(1.0); };
+        for (int y = 0; y < H * K; ++y)
+            for (int x = 0; x < W * K; ++x) {
+                const Vec2 p((x + 0.5) / K, (y + 0.5) / K);
+                put.put(p, L(p));
+                splat.splat(p, L(p));
+            }
+        const Bitmap a = film->develop(put, 0.0), b = film->develop(splat, 1.0 / (K * K));
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) EXPECT_NEAR(a.get(x, y).r, b.get(x, y).r, 2e-3) << x << "," << y;
+    }
 }
 
 TEST(ImageBlock, WithoutFilterSamplesCountForTheirPixel) {
@@ -496,7 +535,7 @@ TEST(ImageBlock, MergedTilesEqualOneBlock) {
             // Equal to the single block up to the order of additions ...
             ASSERT_NEAR(merged.weight(x, y), whole.weight(x, y), 1e-12 * (1 + whole.weight(x, y)));
             ASSERT_NEAR(merged.weightedSum(x, y).g, whole.weightedSum(x, y).g, 1e-12 * (1 + whole.weightedSum(x, y).g));
-            ASSERT_EQ(merged.splatSum(x, y), whole.splatSum(x, y));
+            ASSERT_NEAR(merged.splatSum(x, y).g, whole.splatSum(x, y).g, 1e-12 * (1 + whole.splatSum(x, y).g));
             // ... and bitwise where all samples that reach the pixel come from one tile (the same
             // additions in the same order).
             if (oneTile(x, W) && oneTile(y, H)) {

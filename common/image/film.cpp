@@ -2,9 +2,14 @@
 // §7.9 "Film and the imaging pipeline" for the weighted-average reconstruction).
 //
 // Reconstruction is the weighted average I(p) = sum_i f(x_i - p) L_i / sum_i f(x_i - p) over the samples
-// x_i near pixel centre p = (i + 0.5, j + 0.5) (pbrt-v3 eq. 7.12). Splats from light tracing and
-// Metropolis methods are estimates of the pixel integral itself, so they bypass the division and are
-// scaled by the caller's normalisation instead.
+// x_i near pixel centre p = (i + 0.5, j + 0.5) (pbrt-v3 eq. 7.12). With samples spread uniformly over the
+// crop window this converges to the image filtered with f normalized over the window:
+// I(p) = int f(x - p) L(x) dx / int f(x - p) dx. Splats from light tracing and Metropolis methods are
+// estimates of a density of L over the image plane, not samples of L at chosen points, so they cannot be
+// divided by their own weights; they are spread with the same filter and divided by its exact integral
+// over the window instead (filterCoverage), which gives the same filtered image. Every integrator then
+// converges to the same pixels, also at edges and at the window's border (Mitsuba does the former but
+// not the latter for its light image).
 #include "image/film.h"
 
 #include <algorithm>
@@ -39,27 +44,34 @@ size_t ImageBlock::index(int x, int y) const {
     return static_cast<size_t>(sy) * static_cast<size_t>(w_ + 2 * border_) + static_cast<size_t>(sx);
 }
 
-void ImageBlock::put(const Vec2 &raster, const Spectrum &value) {
+void ImageBlock::put(const Vec2 &raster, const Spectrum &value) { deposit(raster, value, sum_, true); }
+
+void ImageBlock::splat(const Vec2 &raster, const Spectrum &value) { deposit(raster, value, splat_, false); }
+
+void ImageBlock::deposit(const Vec2 &raster, const Spectrum &value, std::vector<double> &channels, bool weighted) {
     if (!value.isFinite() || !std::isfinite(raster.x) || !std::isfinite(raster.y)) {
         ++invalid_;
         return;
     }
+    // The storage spans pixels [lo, hi] per axis, the border included.
+    const int loX = ox_ - border_, hiX = ox_ + w_ + border_ - 1;
+    const int loY = oy_ - border_, hiY = oy_ + h_ + border_ - 1;
+    const auto add = [&](size_t i, double w) {
+        channels[3 * i] += w * value.r;
+        channels[3 * i + 1] += w * value.g;
+        channels[3 * i + 2] += w * value.b;
+        if (weighted) weight_[i] += w;
+    };
     if (!filter_) {
         // Without a filter a sample counts, with weight one, for the pixel that contains it.
         const double x = std::floor(raster.x), y = std::floor(raster.y);
-        if (x < ox_ || y < oy_ || x >= static_cast<double>(ox_) + w_ || y >= static_cast<double>(oy_) + h_) return;
-        const size_t i = index(static_cast<int>(x), static_cast<int>(y));
-        sum_[3 * i] += value.r;
-        sum_[3 * i + 1] += value.g;
-        sum_[3 * i + 2] += value.b;
-        weight_[i] += 1.0;
+        if (x < loX || y < loY || x > hiX || y > hiY) return;
+        add(index(static_cast<int>(x), static_cast<int>(y)), 1.0);
         return;
     }
-    // Work relative to pixel centres; the storage spans pixels [lo, hi] per axis.
+    // Work relative to pixel centres.
     const double r = filter_->radius();
     const double px = raster.x - 0.5, py = raster.y - 0.5;
-    const int loX = ox_ - border_, hiX = ox_ + w_ + border_ - 1;
-    const int loY = oy_ - border_, hiY = oy_ + h_ + border_ - 1;
     // Reject far-away samples in floating point first, so that the int conversions below cannot overflow.
     if (px + r < loX || px - r > hiX || py + r < loY || py - r > hiY) return;
     const int x0 = std::max(loX, static_cast<int>(std::ceil(px - r)));
@@ -73,30 +85,8 @@ void ImageBlock::put(const Vec2 &raster, const Spectrum &value) {
     for (int y = y0; y <= y1; ++y) wy[y - y0] = filter_->eval(y - py);
     for (int y = y0; y <= y1; ++y) {
         size_t i = index(x0, y);
-        for (int x = x0; x <= x1; ++x, ++i) {
-            const double w = wx[x - x0] * wy[y - y0];
-            sum_[3 * i] += w * value.r;
-            sum_[3 * i + 1] += w * value.g;
-            sum_[3 * i + 2] += w * value.b;
-            weight_[i] += w;
-        }
+        for (int x = x0; x <= x1; ++x, ++i) add(i, wx[x - x0] * wy[y - y0]);
     }
-}
-
-void ImageBlock::splat(const Vec2 &raster, const Spectrum &value) {
-    if (!value.isFinite() || !std::isfinite(raster.x) || !std::isfinite(raster.y)) {
-        ++invalid_;
-        return;
-    }
-    const double x = std::floor(raster.x), y = std::floor(raster.y);
-    // Splats outside the storage belong to pixels this block does not hold.
-    if (x < ox_ - border_ || y < oy_ - border_ || x >= static_cast<double>(ox_) + w_ + border_ ||
-        y >= static_cast<double>(oy_) + h_ + border_)
-        return;
-    const size_t i = index(static_cast<int>(x), static_cast<int>(y));
-    splat_[3 * i] += value.r;
-    splat_[3 * i + 1] += value.g;
-    splat_[3 * i + 2] += value.b;
 }
 
 // Element-wise addition, row by row over contiguous storage: for the same blocks merged in the same
@@ -143,15 +133,43 @@ Bitmap Film::develop(const ImageBlock &block, double splatScale) const {
     if (block.offsetX() > 0 || block.offsetY() > 0 || block.offsetX() + block.width() < cropW_ ||
         block.offsetY() + block.height() < cropH_)
         throw std::invalid_argument("Film::develop: the block does not cover the crop window");
+    const std::vector<double> nx = filterCoverage(*filter_, cropW_), ny = filterCoverage(*filter_, cropH_);
     Bitmap img(cropW_, cropH_);
     for (int y = 0; y < cropH_; ++y)
         for (int x = 0; x < cropW_; ++x) {
             // A pixel no sample reached (weight zero) has no estimate from put(); it shows only splats.
             const double w = block.weight(x, y);
             const Spectrum filtered = w != 0 ? block.weightedSum(x, y) / w : Spectrum(0.0);
-            img.set(x, y, filtered + block.splatSum(x, y) * splatScale);
+            img.set(x, y, filtered + block.splatSum(x, y) * (splatScale / (nx[x] * ny[y])));
         }
     return img;
+}
+
+std::vector<double> filterCoverage(const ReconstructionFilter &filter, int n) {
+    // Composite Simpson over pieces of half a pixel: the filters are smooth inside a piece, and their kinks
+    // and jumps (tent at 0, box at +-1/2, the cubics at +-1) fall on piece boundaries.
+    constexpr int kSteps = 64;
+    const double r = filter.radius();
+    const auto integrate = [&](double a, double b) {
+        const double h = (b - a) / kSteps;
+        double sum = filter.eval(a) + filter.eval(b);
+        for (int k = 1; k < kSteps; ++k) sum += filter.eval(a + k * h) * (k % 2 ? 4.0 : 2.0);
+        return sum * h / 3.0;
+    };
+    // Coverage of pixel i: the integral of f(i + 1/2 - t) for t in [0, n), taken in u = i + 1/2 - t over
+    // [max(-r, i + 1/2 - n), min(r, i + 1/2)].
+    std::vector<double> coverage(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        const double lo = std::max(-r, i + 0.5 - n), hi = std::min(r, i + 0.5);
+        double sum = 0;
+        for (double a = lo; a < hi;) {
+            const double b = std::min(hi, (std::floor(2.0 * a) + 1.0) / 2.0);
+            sum += integrate(a, b);
+            a = b;
+        }
+        coverage[static_cast<size_t>(i)] = sum;
+    }
+    return coverage;
 }
 
 std::shared_ptr<Film> Film::create(int width, int height, std::shared_ptr<ReconstructionFilter> filter) {

@@ -23,8 +23,8 @@ public:
     ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter);
     // Filtered sample: adds filter(x) * value and filter(x) weight to nearby pixels.
     void put(const Vec2 &raster, const Spectrum &value);
-    // Unfiltered splat into the pixel containing `raster` (light tracing, MLT); kept separate so that it
-    // is not divided by the filter weights.
+    // Splat (light tracing, MLT): adds filter(x) * value to nearby pixels, kept apart from put()'s sums
+    // so that it is not divided by the filter weights (see Film::develop).
     void splat(const Vec2 &raster, const Spectrum &value);
     // Adds another block (which must lie inside this one's region incl. border) into this one.
     void merge(const ImageBlock &other);
@@ -54,6 +54,8 @@ public:
 
 private:
     size_t index(int x, int y) const;
+    // Adds filter(x) * value to `channels` (and filter(x) to the weights if `weighted`) around `raster`.
+    void deposit(const Vec2 &raster, const Spectrum &value, std::vector<double> &channels, bool weighted);
     int ox_, oy_, w_, h_, border_;
     const ReconstructionFilter *filter_;
     std::vector<double> sum_;     // 3 per pixel
@@ -94,7 +96,7 @@ public:
     }
 
     // Develops a block that covers the crop window into an image: weighted sum / weight plus
-    // splatScale * splat sum, per pixel.
+    // splatScale * splat sum / the filter's coverage of the pixel (filterCoverage along x times along y).
     Bitmap develop(const ImageBlock &block, double splatScale) const;
 
     // An hdrfilm without crop; a null filter means Mitsuba's default (gaussian, stddev 0.5). Throws
@@ -111,5 +113,9 @@ protected:
     std::string fileFormat_ = "openexr";
     bool highQualityEdges_ = false;
 };
+
+// Per pixel i of a row of n pixels, the integral of the 1D filter centred on the pixel over the row,
+// int_0^n f(i + 1/2 - t) dt: 1 for a box filter, the filter's full integral away from the ends.
+std::vector<double> filterCoverage(const ReconstructionFilter &filter, int n);
 
 }  // namespace pf
