@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_scene.h"
 #include "image/bitmap.h"
 #include "integrators/erpt.h"
 #include "integrators/mlt.h"
@@ -45,26 +46,6 @@ struct Options {
     double seconds = 10;
     std::string scene = "scenes/veach-bidir/scene.xml", out;
 };
-
-// The scene with its sensor's sampleCount set to `spp` (ERPT's seeds per pixel), through a copy of the
-// file beside links to the scene's other files.
-std::unique_ptr<pf::Scene> loadWithSampleCount(const std::string &path, int spp, int res) {
-    const fs::path src(path), dir = fs::temp_directory_path() / ("bench_mlt_" + std::to_string(getpid()));
-    fs::create_directories(dir);
-    for (const auto &entry : fs::directory_iterator(src.parent_path()))
-        if (entry.path().filename() != src.filename() && !fs::exists(dir / entry.path().filename()))
-            fs::create_symlink(fs::absolute(entry.path()), dir / entry.path().filename());
-    std::ifstream in(src);
-    std::stringstream xml;
-    xml << in.rdbuf();
-    const std::regex count(R"(<integer name="sampleCount" value="\d+"\s*/>)");
-    const std::string edited =
-        std::regex_replace(xml.str(), count, "<integer name=\"sampleCount\" value=\"" + std::to_string(spp) + "\"/>");
-    std::ofstream(dir / "scene.xml") << edited;
-    auto scene = pf::loadScene((dir / "scene.xml").string());
-    scene->resizeFilm(res, res);
-    return scene;
-}
 
 // `type` with the scene file's maxDepth and, for erpt, chainLength `chainLength` (0: the default).
 std::unique_ptr<pf::Integrator> makeIntegrator(const pf::Scene &scene, const std::string &type, int chainLength = 0) {
@@ -160,7 +141,7 @@ int main(int argc, char **argv) {
     std::printf("%s, %d x %d\n", o.scene.c_str(), o.res, o.res);
 
     // 1. Per-core throughput and acceptance.
-    const auto scene = loadWithSampleCount(o.scene, o.seedSpp, o.res);
+    const auto scene = bench::loadWithSampleCount(o.scene, o.seedSpp, o.res, "bench_mlt");
     for (const std::string type : {"mlt", "erpt"}) {
         const auto integrator = makeIntegrator(*scene, type);
         double seconds = 0;
@@ -196,7 +177,7 @@ int main(int argc, char **argv) {
             // fixed part, the direct component, and a part proportional to the seeds).
             double probe[2];
             for (int k = 0; k < 2; ++k) {
-                const auto probeScene = loadWithSampleCount(o.scene, 1 + 2 * k, o.res);
+                const auto probeScene = bench::loadWithSampleCount(o.scene, 1 + 2 * k, o.res, "bench_mlt");
                 pf::RenderStats stats;
                 render(*probeScene, *makeIntegrator(*probeScene, m.type, m.chainLength), 0, 0, 1, o.threads, stats);
                 probe[k] = stats.seconds;
@@ -204,7 +185,7 @@ int main(int argc, char **argv) {
             const double perSeed = std::max(1e-9, (probe[1] - probe[0]) / 2), fixed = probe[0] - perSeed;
             seeds = std::max(1, static_cast<int>((o.seconds - fixed) / perSeed));
         }
-        const auto methodScene = timed ? nullptr : loadWithSampleCount(o.scene, seeds, o.res);
+        const auto methodScene = timed ? nullptr : bench::loadWithSampleCount(o.scene, seeds, o.res, "bench_mlt");
         const pf::Scene &s = timed ? *scene : *methodScene;
         const auto integrator = makeIntegrator(s, m.type, m.chainLength);
         Error mean;

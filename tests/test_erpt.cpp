@@ -132,7 +132,6 @@ TEST(ERPTParameters, MitsubaNamesAndChecks) {
             EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
         }
     };
-    fails({{"manifoldPerturbation", "true"}}, "arrives with manifold exploration");
     fails({{"numChains", "0.0"}}, "numChains");
     fails({{"maxChains", "-1"}}, "maxChains");
     fails({{"chainLength", "0"}}, "chainLength");

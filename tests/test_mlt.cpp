@@ -143,7 +143,7 @@ TEST(MLTParameters, MitsubaNamesAndChecks) {
             EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
         }
     };
-    fails({{"manifoldPerturbation", "true"}}, "arrives with manifold exploration");
+    fails({{"probFactor", "0.0"}}, "lambda");
     fails({{"twoStage", "true"}}, "two-stage MLT is not implemented");
     fails({{"maxDepth", "0"}}, "maxDepth");
     fails({{"rrDepth", "0"}}, "rrDepth");

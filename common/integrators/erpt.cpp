@@ -26,8 +26,12 @@ uint64_t blockCount(const Scene &scene) {
 
 }  // namespace
 
-ERPT::ERPT(const Properties &props)
-    : PathSpaceIntegrator(props, {MutationType::Lens, MutationType::Caustic, MutationType::MultiChain}) {
+ERPT::ERPT(const Properties &props, bool manifoldExploration)
+    : PathSpaceIntegrator(
+          props, manifoldExploration
+                     ? std::vector<MutationType>{MutationType::Manifold}
+                     : std::vector<MutationType>{MutationType::Lens, MutationType::Caustic, MutationType::MultiChain}),
+      manifoldExploration_(manifoldExploration) {
     numChains_ = props.getFloat("numChains", 1.0);
     maxChains_ = props.getInt("maxChains", 0);
     chainLength_ = props.getInt("chainLength", 100);

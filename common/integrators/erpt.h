@@ -16,10 +16,14 @@
 // Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
 // numChains (1), maxChains (0: no cap on the chains of one seed), chainLength (100), lensPerturbation (true),
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
-// (false), manifoldPerturbation (false; rejected when true: it arrives with manifold exploration), lambda (50),
+// (false), manifoldPerturbation (false), lambda (50),
 // luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
 // see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel, taken from the scene's
 // sampleCount (see seeding()).
+//
+// `mept` (manifold exploration path tracing, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the
+// manifold perturbation, which subsumes the lens, caustic and multi-chain perturbations, on by default in
+// their place (path/manifold_perturbation.h); the same parameters switch any of them.
 #pragma once
 #include "integrators/mlt.h"
 
@@ -27,8 +31,9 @@ namespace pf {
 
 class ERPT final : public PathSpaceIntegrator {
 public:
-    explicit ERPT(const Properties &props);
-    std::string name() const override { return "erpt"; }
+    // manifoldExploration: MEPT's default mutations and name.
+    explicit ERPT(const Properties &props, bool manifoldExploration = false);
+    std::string name() const override { return manifoldExploration_ ? "mept" : "erpt"; }
     ChainKind chainKind() const override { return ChainKind::Burst; }
     // The pool: the scene's sampleCount BDPT samples per pixel (Mitsuba: "the size of this pool is given
     // by the samplesPerPixel parameter of the sample generator").
@@ -46,6 +51,7 @@ public:
 private:
     double numChains_ = 1;
     int64_t maxChains_ = 0, chainLength_ = 100;
+    bool manifoldExploration_ = false;
 };
 
 }  // namespace pf

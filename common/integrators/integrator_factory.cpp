@@ -19,6 +19,8 @@ const std::map<std::string, Factory> &factories() {
     static const std::map<std::string, Factory> table = {
         {"bdpt", [](const Properties &p) { return std::make_unique<BDPT>(p); }},
         {"erpt", [](const Properties &p) { return std::make_unique<ERPT>(p); }},
+        {"memlt", [](const Properties &p) { return std::make_unique<MLT>(p, true); }},
+        {"mept", [](const Properties &p) { return std::make_unique<ERPT>(p, true); }},
         {"mlt", [](const Properties &p) { return std::make_unique<MLT>(p); }},
         {"mmlt", [](const Properties &p) { return std::make_unique<MMLT>(p); }},
         {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p, false); }},

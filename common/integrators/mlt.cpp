@@ -1,11 +1,13 @@
 #include "integrators/mlt.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "path/bidirectional_mutation.h"
 #include "path/caustic_perturbation.h"
 #include "path/lens_perturbation.h"
 #include "path/lens_subpath_mutation.h"
+#include "path/manifold_perturbation.h"
 #include "path/multichain_perturbation.h"
 #include "scene/scene.h"
 
@@ -14,9 +16,9 @@ namespace pf {
 namespace {
 
 // The parameter that enables each mutation type, in MutationType order.
-constexpr const char *kMutationParameters[kMutationTypes] = {"bidirectionalMutation", "lensSubpathMutation",
-                                                             "lensPerturbation", "causticPerturbation",
-                                                             "multiChainPerturbation"};
+constexpr const char *kMutationParameters[kMutationTypes] = {"bidirectionalMutation",  "lensSubpathMutation",
+                                                             "lensPerturbation",       "causticPerturbation",
+                                                             "multiChainPerturbation", "manifoldPerturbation"};
 
 // The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
 // since a path lands wherever it meets the film.
@@ -39,11 +41,9 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
         const bool byDefault = std::find(defaults.begin(), defaults.end(), type) != defaults.end();
         if (props.getBool(mutationParameter(type), byDefault)) types_.push_back(type);
     }
-    if (props.getBool("manifoldPerturbation", false))
-        props.fail("manifoldPerturbation",
-                   "the manifold perturbation arrives with manifold exploration (leave manifoldPerturbation false)");
     // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda.
-    if (!(props.getFloat("probFactor", props.getFloat("lambda", 50)) > 0)) props.fail("lambda", "must be positive");
+    lambda_ = props.getFloat("probFactor", props.getFloat("lambda", 50));
+    if (!(lambda_ > 0) || !std::isfinite(lambda_)) props.fail("lambda", "must be positive");
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -77,13 +77,16 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
             case MutationType::MultiChain:
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
+            case MutationType::Manifold:
+                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda_));
+                break;
         }
     return set;
 }
 
 void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
                                    double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts,
-                  ChainCounters &) const {
+                                   ChainCounters &counters) const {
     // The chain starts on the resampled candidate itself (ALGORITHMS.md §2.4), regenerated from its record.
     MutablePath start;
     bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });
@@ -92,11 +95,23 @@ void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const C
     // A candidate carries energy, so its path does; pi = 0 could only come from round-off in re-evaluating
     // a Dirac vertex from the other side, and such a start is left out rather than divided by.
     if (start.length() > 0 && chain.start(start) > 0) runMetropolis(chain, task.mutations, rng, nullptr, counts);
+    for (size_t k = 0; k < set.size(); ++k) set[k].addCounters(counters);
 }
 
-MLT::MLT(const Properties &props)
-    : PathSpaceIntegrator(props, {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens,
-                                  MutationType::Caustic, MutationType::MultiChain}) {
+namespace {
+
+// MLT's mutations by default, and MEMLT's ([TR §8]; ALGORITHMS.md §5.4): the bidirectional mutation for
+// ergodicity and the manifold perturbation in place of Veach's perturbations.
+std::vector<MutationType> mltDefaults(bool manifoldExploration) {
+    if (manifoldExploration) return {MutationType::Bidirectional, MutationType::Manifold};
+    return {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens, MutationType::Caustic,
+            MutationType::MultiChain};
+}
+
+}  // namespace
+
+MLT::MLT(const Properties &props, bool manifoldExploration)
+    : PathSpaceIntegrator(props, mltDefaults(manifoldExploration)), manifoldExploration_(manifoldExploration) {
     luminanceSamples_ = props.getInt("luminanceSamples", 100000);
     if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
     if (props.getBool("twoStage", false))

@@ -14,11 +14,16 @@
 //   bidirectionalMutation (true), lensPerturbation (true), causticPerturbation (true),
 //   multiChainPerturbation (true)  the mutations in use
 //   lensSubpathMutation (true)     Veach's lens subpath mutation (not in Mitsuba 0.6, which dropped it)
-//   manifoldPerturbation (false)   rejected when true: it arrives with manifold exploration
-//   lambda (50)                    the manifold perturbation's jump size (Mitsuba also reads probFactor)
+//   manifoldPerturbation (false)   manifold exploration's manifold perturbation (path/manifold_perturbation.h)
+//   lambda (50)                    the manifold perturbation's jump size (Mitsuba also reads probFactor,
+//                                  which takes precedence)
 //   twoStage (false)               rejected when true: two-stage MLT is not implemented
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
+//
+// `memlt` (manifold exploration MLT, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the bidirectional
+// mutation and the manifold perturbation on by default and Veach's perturbations off; the same parameters
+// switch any of them.
 #pragma once
 #include <memory>
 #include <vector>
@@ -38,8 +43,7 @@ class PathSpaceIntegrator : public ChainIntegrator {
 public:
     MutationCounts mutationTypes() const override { return PathChain::mutationTypes(types_); }
     void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed, double scale,
-                  PCG32 &rng, ImageBlock &film, MutationCounts &counts,
-                  ChainCounters &counters) const override;
+                  PCG32 &rng, ImageBlock &film, MutationCounts &counts, ChainCounters &counters) const override;
     const SamplingIntegrator *directIntegrator() const override { return direct_.get(); }
     int64_t directSamples() const override { return directSamples_; }
 
@@ -61,17 +65,20 @@ private:
     std::unique_ptr<BDPT> bdpt_, direct_;
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
+    double lambda_ = 50;
     std::vector<MutationType> types_;
 };
 
 class MLT final : public PathSpaceIntegrator {
 public:
-    explicit MLT(const Properties &props);
-    std::string name() const override { return "mlt"; }
+    // manifoldExploration: MEMLT's default mutations and name.
+    explicit MLT(const Properties &props, bool manifoldExploration = false);
+    std::string name() const override { return manifoldExploration_ ? "memlt" : "mlt"; }
     SeedingConfig seeding(const Scene &scene) const override;
 
 private:
     int64_t luminanceSamples_ = 100000;
+    bool manifoldExploration_ = false;
 };
 
 }  // namespace pf

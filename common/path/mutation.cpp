@@ -65,6 +65,8 @@ const char *mutationName(MutationType type) {
             return "caustic";
         case MutationType::MultiChain:
             return "multiChain";
+        case MutationType::Manifold:
+            return "manifold";
     }
     return "";
 }

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "mcmc/metropolis.h"
 #include "path/path.h"
 
 namespace pf {
@@ -59,17 +60,21 @@ double importanceToCanonical(const Scene &scene, const PathView &path, int i);
 // scatters through a smooth lobe, or the endpoint node it is.
 bool isNonSpecular(const PathVertex &v);
 
-// Veach's mutation and perturbation types, in the order of MutationSet's counts.
-enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain };
-constexpr int kMutationTypes = 5;
+// Veach's mutation and perturbation types and manifold exploration's manifold perturbation
+// (path/manifold_perturbation.h), in the order of MutationSet's counts.
+enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain, Manifold };
+constexpr int kMutationTypes = 6;
 const char *mutationName(MutationType type);
 
 // What a mutation replaced: x keeps x_{-1} .. x_l and x_m .. x_n, and y has `added` new vertices between
 // them (so y's kept suffix starts at l + added + 1). Perturbations replace x_{l+1} .. x_{m-1} in place.
 struct MutationRecord {
     int l = 0, m = 0, added = 0;
+    // Perturbations that can run either way over x_l .. x_m (the manifold perturbation): the vertex whose
+    // direction was perturbed, l or m; -1 for the others.
+    int source = -1;
     // The same move seen from y back to x.
-    MutationRecord reverse() const { return {l, l + added + 1, m - l - 1}; }
+    MutationRecord reverse() const { return {l, l + added + 1, m - l - 1, source}; }
 };
 
 class Mutation {
@@ -85,6 +90,9 @@ public:
     // T(x -> y) in the canonical measure for the move `record` (zero when the mutation cannot make it).
     virtual double density(const Scene &scene, const PathView &x, const PathView &y,
                            const MutationRecord &record) const = 0;
+    // Adds what the mutation measured over a chain's run beyond proposals and acceptances (the manifold
+    // walks of ALGORITHMS.md §5.5 Table 1) into `counters`.
+    virtual void addCounters(ChainCounters &) const {}
 };
 
 // The mixture of enabled mutations.
