@@ -142,8 +142,11 @@ int main(int argc, char **argv) {
     }
     const double mergeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / kRepeats;
     const double cpuPerTask = masterCpu / static_cast<double>(tasks);
-    std::printf("tasks:                       %8lld of %lld spp\n", static_cast<long long>(tasks),
-                static_cast<long long>(imageTaskSize(spp, 0)));
+    int64_t largest = 0;
+    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first))
+        largest = std::max(largest, imageTaskSize(spp, first));
+    std::printf("tasks:                       %8lld of %lld to %lld spp\n", static_cast<long long>(tasks),
+                static_cast<long long>(imageTaskSize(spp, 0)), static_cast<long long>(largest));
     std::printf("result on the wire:          %8.3f MB per task (%.2f bytes per pixel; raw doubles: 56)\n", bytes / 1e6,
                 bytes / (static_cast<double>(res) * res));
     std::printf("decode + merge:              %8.2f ms per task (in-process)\n", 1e3 * mergeSeconds);

@@ -11,11 +11,13 @@
 #include <random>
 
 #include "farm/block_codec.h"
+#include "farm/chain_codec.h"
 #include "farm/convert.h"
 #include "farm/error.h"
 #include "farm/job_setup.h"
 #include "farm/rpc.h"
 #include "render/image_task.h"
+#include "scene/scene.h"
 
 namespace pf::master {
 
@@ -92,7 +94,40 @@ int64_t taskSize(const JobSpec &spec, int64_t firstSample) {
                          firstSample);
 }
 
+// Task `index` of a Markov-chain job (chain tasks only once it is seeded), as the store and the workers
+// see it.
+v1::TaskSpec chainJobWork(const ChainJob &job, uint64_t index) {
+    v1::TaskSpec work;
+    switch (job.phaseOf(index)) {
+        case ChainJob::Phase::Seeding:
+            work.mutable_seeding()->set_first_pixel(job.seedingTask(index).firstPixel);
+            work.mutable_seeding()->set_pixel_count(job.seedingTask(index).pixelCount);
+            break;
+        case ChainJob::Phase::Direct:
+            work.mutable_image()->set_first_sample(job.directTask(index).firstSample);
+            work.mutable_image()->set_sample_count(job.directTask(index).sampleCount);
+            work.mutable_image()->set_direct(true);
+            break;
+        case ChainJob::Phase::Chain:
+            *work.mutable_chain() = farm::toProto(job.chainTask(index));
+            break;
+    }
+    return work;
+}
+
 }  // namespace
+
+struct Master::Loaded {
+    std::unique_ptr<Scene> scene;
+    std::unique_ptr<Integrator> integrator;
+};
+
+// A Markov-chain job's film side: the scene and integrator its chain tasks are formed with, and the
+// ChainJob that forms them and merges the results.
+struct Master::ChainState {
+    Loaded loaded;
+    std::unique_ptr<ChainJob> job;
+};
 
 struct Master::TaskRuntime {
     enum class State { Pending, Leased, Accepted, Merged };
@@ -105,18 +140,24 @@ struct Master::TaskRuntime {
 
 struct Master::JobFilm {
     std::mutex mu;
-    std::shared_ptr<Film> film;       // set once before the job is visible; immutable after
-    std::optional<ImageBlock> block;  // the merged film; released when the job ends
-    int64_t merged = 0;               // tasks [0, merged) are in `block`
-    int64_t checkpointed = 0;         // tasks [0, checkpointed) are in the checkpoint file
-    int64_t spp = 0;
+    std::shared_ptr<Film> film;  // set once before the job is visible; immutable after
+    // What the merged results form, released when the job ends: an image job's film, or a Markov-chain
+    // job's ChainState.
+    std::optional<ImageBlock> block;
+    std::unique_ptr<ChainState> chain;
+    bool open() const { return block || chain; }
+    int64_t merged = 0;        // tasks [0, merged) are in `block`
+    int64_t checkpointed = 0;  // tasks [0, checkpointed) are in the checkpoint file
+    int64_t spp = 0;           // image jobs: samples per pixel merged
     struct Pending {
         std::string file;
         v1::TaskStats stats;
-        int64_t spp;
+        v1::TaskSpec work;
     };
-    std::map<int64_t, Pending> pending;              // accepted, waiting for their turn
-    std::vector<std::string> mergedSinceCheckpoint;  // their result files, deleted once checkpointed
+    std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
+    // Their result files, deleted once checkpointed (a chain job's seeding results are kept: they are
+    // merged again after a restart).
+    std::vector<std::string> mergedSinceCheckpoint;
     std::string checkpointFile;
     Clock::time_point lastCheckpoint = Clock::now(), lastPreview;
     Clock::duration checkpointCost{};  // of the last checkpoint
@@ -127,10 +168,15 @@ struct Master::JobRuntime {
     std::vector<TaskRuntime> tasks;  // issued tasks, by index
     std::set<int64_t> retry;         // issued tasks waiting for another attempt, lowest first
     int64_t nextFirstSample = 0;
-    int64_t total = 0;  // tasks the job will have; 0 while a time budget is open
+    int64_t total = 0;  // tasks the job will have; 0 while a time budget is open or the seeding runs
+    // Markov-chain jobs: tasks [0, chainFirst) seed the chains and render the direct component; chain tasks
+    // are issued once `seeded` (the normalizer exists, and is immutable from then on).
+    bool chain = false;
+    int64_t seedingTasks = 0, chainFirst = 0, seedingSpp = 0;
+    bool seeded = false;
     std::map<std::string, int> failuresByWorker;
     std::set<std::string> blocklist;
-    double taskSeconds = 0;  // of accepted results, for the time-budget estimate
+    double taskSeconds = 0;  // of accepted results that the time budget issues, for its estimate
     int64_t taskCount = 0;
     int64_t failedAttempts = 0, expiredAttempts = 0;
     std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task
@@ -177,7 +223,7 @@ void Master::touch() {
 // ---------------------------------------------------------------------------------------------------
 // Submission and recovery
 
-std::shared_ptr<Film> Master::loadFilm(const JobSpec &spec, v1::Job &record) const {
+Master::Loaded Master::load(const JobSpec &spec, v1::Job &record) const {
     if (!bundles_.has(spec.bundle_hash()))
         throw farm::FarmError("job spec: unknown bundle '" + spec.bundle_hash() + "' (upload it first)");
     const v1::BundleManifest manifest = bundles_.manifest(spec.bundle_hash());
@@ -200,9 +246,12 @@ std::shared_ptr<Film> Master::loadFilm(const JobSpec &spec, v1::Job &record) con
         throw farm::FarmError("job spec: " + std::to_string(film.cropWidth()) + "x" +
                               std::to_string(film.cropHeight()) + " pixels exceed this master's limit of " +
                               std::to_string(cfg_.maxPixels));
-    if (!dynamic_cast<const SamplingIntegrator *>(integrator.get()))
+    const auto *chain = dynamic_cast<const ChainIntegrator *>(integrator.get());
+    if (!chain && !dynamic_cast<const SamplingIntegrator *>(integrator.get()))
         throw farm::FarmError("job spec: integrator '" + integrator->name() +
-                              "' does not render in image tasks, which is all this farm distributes");
+                              "' renders neither in image tasks nor in chain tasks");
+    // A chain integrator refuses budgets it cannot split into tasks (SceneError, for the submitter).
+    if (chain && record.spec().budget().has_spp()) chain->chainTaskCount(*scene, record.spec().budget().spp());
     record.set_scene_file(manifest.scene_file());
     record.set_integrator(integrator->name());
     record.set_width(film.cropWidth());
@@ -210,18 +259,44 @@ std::shared_ptr<Film> Master::loadFilm(const JobSpec &spec, v1::Job &record) con
     record.set_scene_load_seconds(std::chrono::duration<double>(Clock::now() - t0).count());
     if (!record.spec().budget().has_spp() && !record.spec().budget().has_time_seconds())
         record.mutable_spec()->mutable_budget()->set_spp(scene->sensor().sampleCount());
-    return scene->sensor().filmPtr();
+    return {std::move(scene), std::move(integrator)};
+}
+
+void Master::openFilm(JobRuntime &j, Loaded loaded) {
+    JobFilm &f = j.film;
+    f.film = loaded.scene->sensor().filmPtr();
+    const auto *chain = dynamic_cast<const ChainIntegrator *>(loaded.integrator.get());
+    if (!chain) {
+        // An image job needs only the film; the scene's memory goes.
+        f.block.emplace(0, 0, f.film->cropWidth(), f.film->cropHeight(), &f.film->filter());
+        j.filmOpen = true;
+        return;
+    }
+    const JobSpec &spec = j.record.spec();
+    auto state = std::make_unique<ChainState>();
+    state->job = std::make_unique<ChainJob>(*loaded.scene, *chain, spec.seed(),
+                                            spec.budget().has_spp() ? spec.budget().spp() : 0);
+    state->loaded = std::move(loaded);
+    const ChainJob &job = *state->job;
+    j.chain = true;
+    j.seedingTasks = static_cast<int64_t>(job.seedingTaskCount());
+    j.chainFirst = static_cast<int64_t>(job.firstChainTask());
+    j.seedingSpp = job.seedingConfig().samplesPerPixel;
+    v1::ChainStats *stats = j.record.mutable_chain();
+    if (stats->phase() == v1::CHAIN_PHASE_UNSPECIFIED) stats->set_phase(v1::CHAIN_PHASE_SEEDING);
+    stats->set_seeding_tasks(job.seedingTaskCount());
+    stats->set_direct_tasks(job.directTaskCount());
+    f.chain = std::move(state);
+    j.filmOpen = true;
 }
 
 v1::Job Master::submit(const JobSpec &spec) {
     checkSpec(spec, cfg_);
     auto j = std::make_unique<JobRuntime>();
     *j->record.mutable_spec() = spec;
-    j->film.film = loadFilm(spec, j->record);
-    const Film &film = *j->film.film;
-    j->film.block.emplace(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
-    j->filmOpen = true;
-    if (j->record.spec().budget().has_spp())
+    openFilm(*j, load(spec, j->record));
+    // A chain job's total is known once its seeding tells whether the image carries any energy.
+    if (j->record.spec().budget().has_spp() && !j->chain)
         for (int64_t first = 0; first < j->record.spec().budget().spp(); first += taskSize(j->record.spec(), first))
             ++j->total;
     j->record.mutable_tasks()->set_total(j->total);
@@ -274,14 +349,30 @@ void Master::recoverJob(const StoredJob &stored) {
     j.total = j.record.tasks().total();
     try {
         v1::Job reloaded = j.record;
-        j.film.film = loadFilm(j.record.spec(), reloaded);
-        const Film &film = *j.film.film;
-        j.film.block.emplace(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
-        j.filmOpen = true;
-        if (!stored.checkpoint.empty()) farm::decodeBlock(farm::readFile(stored.checkpoint), *j.film.block);
+        openFilm(j, load(j.record.spec(), reloaded));
+        if (j.chain) {
+            // The seeding results merged before the restart are merged again from their files, then the
+            // checkpoint puts back the direct component and the chains.
+            ChainJob &job = *j.film.chain->job;
+            for (const StoredResult &r : store_.loadResults(id, std::min(stored.mergedTasks, j.seedingTasks)))
+                job.mergeSeeding(std::get<SeedingResult>(
+                    decodeOutput(j, chainJobWork(job, static_cast<uint64_t>(r.taskIndex)), farm::readFile(r.file))));
+            if (!stored.checkpoint.empty()) {
+                v1::ChainCheckpoint cp;
+                if (!cp.ParseFromString(farm::readFile(stored.checkpoint)))
+                    throw farm::FarmError("corrupt checkpoint " + stored.checkpoint);
+                ImageBlock direct = makeFilmBlock(job.scene());
+                farm::decodeBlock(cp.direct(), direct);
+                job.restore(std::move(direct), cp.direct_samples_per_pixel(),
+                            farm::fromProto(cp.chains(), makeFilmBlock(job.scene())));
+            }
+        } else if (!stored.checkpoint.empty()) {
+            farm::decodeBlock(farm::readFile(stored.checkpoint), *j.film.block);
+        }
     } catch (const std::exception &e) {
         spdlog::error("job={}: cannot resume after a restart: {}", id, e.what());
         j.film.block.reset();
+        j.film.chain.reset();
         setState(j, v1::JOB_FAILED, std::string("cannot resume after a restart: ") + e.what());
         return;
     }
@@ -327,11 +418,14 @@ void Master::recoverJob(const StoredJob &stored) {
             j.retry.insert(static_cast<int64_t>(i));
     for (const std::string &w : store_.loadBlocklist(id)) j.blocklist.insert(w);
     for (const StoredResult &r : store_.loadUnmergedResults(id)) {
-        j.film.pending[r.taskIndex] = {r.file, r.stats,
-                                       j.tasks.at(static_cast<size_t>(r.taskIndex)).work.image().sample_count()};
-        j.taskSeconds += r.stats.seconds();
-        ++j.taskCount;
+        const v1::TaskSpec &work = j.tasks.at(static_cast<size_t>(r.taskIndex)).work;
+        j.film.pending[r.taskIndex] = {r.file, r.stats, work};
+        if (r.taskIndex >= j.chainFirst) {
+            j.taskSeconds += r.stats.seconds();
+            ++j.taskCount;
+        }
     }
+    if (j.chain && j.film.chain->job->seeded()) startChains(j);
     spdlog::info("job={}: resumed: {} tasks issued, {} merged in the checkpoint, {} results waiting, {} leases", id,
                  j.tasks.size(), j.film.merged, j.film.pending.size(), leases_.size());
     // No other thread runs yet; the film mutex is taken for the locking discipline of mergeReady.
@@ -364,7 +458,7 @@ v1::Job Master::snapshot(const JobRuntime &j) const {
         progress = 1;
     } else if (j.total > 0) {
         progress = static_cast<double>(c->merged()) / static_cast<double>(j.total);
-    } else if (job.started_unix_ms() > 0) {
+    } else if (job.started_unix_ms() > 0 && job.spec().budget().has_time_seconds()) {
         progress = std::min(0.99, (unixMs() - job.started_unix_ms()) / 1000.0 / job.spec().budget().time_seconds());
     }
     job.set_progress(progress);
@@ -426,7 +520,7 @@ std::optional<Master::ExrImage> Master::image(int64_t id) const {
         out.bytes = farm::readFile(ended.string());
         return out;
     }
-    if (!j->film.block || j->film.spp == 0) return std::nullopt;
+    if (!j->film.open() || j->film.merged == 0) return std::nullopt;
     // writeEXR writes files only; the running image goes through a private temporary one.
     const fs::path tmp = fs::path(jobDir(id)) / "running.exr";
     writeEXR(tmp.string(), develop(*j));
@@ -597,9 +691,8 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
             j.record.set_started_unix_ms(now);
             store_.saveJob(snapshot(j));
         }
-        spdlog::info("job={} task={} attempt={} worker={}: leased, samples [{}, {})", j.record.id(), *index, attempt,
-                     w.info.id(), spec.image().first_sample(),
-                     spec.image().first_sample() + spec.image().sample_count());
+        spdlog::info("job={} task={} attempt={} worker={}: leased, {}", j.record.id(), *index, attempt, w.info.id(),
+                     farm::describeWork(spec));
         touch();
         return spec;
     }
@@ -622,17 +715,26 @@ std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w
     if (!mayIssue(j)) return std::nullopt;
     TaskRuntime t;
     const int64_t index = static_cast<int64_t>(j.tasks.size());
+    if (j.chain) {
+        // The chain job's tasks never change once issued: only its merged results and the normalizer,
+        // which is immutable once `seeded`, are read here.
+        t.work = chainJobWork(*j.film.chain->job, static_cast<uint64_t>(index));
+    } else {
+        t.work.mutable_image()->set_first_sample(j.nextFirstSample);
+        t.work.mutable_image()->set_sample_count(taskSize(j.record.spec(), j.nextFirstSample));
+        j.nextFirstSample += t.work.image().sample_count();
+    }
     t.work.set_task_index(index);
-    t.work.mutable_image()->set_first_sample(j.nextFirstSample);
-    t.work.mutable_image()->set_sample_count(taskSize(j.record.spec(), j.nextFirstSample));
-    j.nextFirstSample += t.work.image().sample_count();
     j.tasks.push_back(std::move(t));
     return index;
 }
 
 bool Master::mayIssue(JobRuntime &j) {
-    if (j.total > 0) return static_cast<int64_t>(j.tasks.size()) < j.total;
-    if (j.tasks.empty()) return true;
+    const int64_t issued = static_cast<int64_t>(j.tasks.size());
+    // A chain job's seeding and direct tasks are all issued; its chain tasks wait for b̂.
+    if (j.chain && (issued < j.chainFirst || !j.seeded)) return issued < j.chainFirst;
+    if (j.total > 0) return issued < j.total;
+    if (issued == j.chainFirst) return true;  // a time budget runs at least one task (of chains)
     // The clock decides whether another whole task is issued, never when one stops: issue while the
     // expected end of a new task is within the budget.
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
@@ -725,13 +827,23 @@ std::string Master::checkAttempt(const std::string &worker, int64_t attempt) con
 
 uint64_t Master::maxPayloadBytes(int64_t attempt) const {
     const std::lock_guard<std::mutex> lock(mu_);
-    for (const auto &[id, j] : jobs_)
-        if (j->attemptTask.count(attempt) && j->film.film) {
-            const Film &f = *j->film.film;
-            const uint64_t b = static_cast<uint64_t>(f.filter().borderSize());
-            const uint64_t raw = 7 * sizeof(double) * (f.cropWidth() + 2 * b) * (f.cropHeight() + 2 * b);
-            return raw + raw / 128 + (64 << 10);  // zstd's worst case is below raw + raw/256 + a header
+    for (const auto &[id, j] : jobs_) {
+        const auto a = j->attemptTask.find(attempt);
+        if (a == j->attemptTask.end() || !j->film.film) continue;
+        const v1::TaskSpec &work = j->tasks[static_cast<size_t>(a->second)].work;
+        if (work.has_seeding()) {
+            // Packed path records take at most 38 bytes; a BDPT sample yields one candidate per strategy.
+            constexpr uint64_t kRecordBytes = 40, kMaxCandidatesPerSample = 256;
+            return work.seeding().pixel_count() * static_cast<uint64_t>(j->seedingSpp) * kMaxCandidatesPerSample *
+                       kRecordBytes +
+                   (64 << 10);
         }
+        // A film block (inside a ChainOutput for chain tasks, beside a few counts).
+        const Film &f = *j->film.film;
+        const uint64_t b = static_cast<uint64_t>(f.filter().borderSize());
+        const uint64_t raw = 7 * sizeof(double) * (f.cropWidth() + 2 * b) * (f.cropHeight() + 2 * b);
+        return raw + raw / 128 + (64 << 10);  // zstd's worst case is below raw + raw/256 + a header
+    }
     return 0;
 }
 
@@ -742,19 +854,21 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
 
     JobRuntime *j = nullptr;
     int64_t task = 0;
+    v1::TaskSpec work;
     {
         const std::lock_guard<std::mutex> lock(mu_);
         for (auto &[id, job] : jobs_)
             if (const auto a = job->attemptTask.find(attempt); a != job->attemptTask.end()) {
                 j = job.get();
                 task = a->second;
+                work = j->tasks[static_cast<size_t>(task)].work;
             }
     }
     const int64_t jobId = j->record.id();
     const auto t0 = Clock::now();
-    ImageBlock block(0, 0, j->film.film->cropWidth(), j->film.film->cropHeight(), &j->film.film->filter());
+    std::optional<TaskOutput> output;
     try {
-        farm::decodeBlock(payload, block);
+        output.emplace(decodeOutput(*j, work, payload));
     } catch (const farm::FarmError &e) {
         fail(worker, attempt, std::string("corrupt result: ") + e.what());
         throw;
@@ -764,7 +878,7 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
         fs::path(jobDir(jobId)) / "results" / (std::to_string(task) + "-" + std::to_string(attempt) + ".blk");
     writeFileAtomic(file, payload, false);
 
-    int64_t spp = 0;
+    bool accepted = false;
     {
         const std::lock_guard<std::mutex> lock(mu_);
         // The lease may have expired or the job ended while the payload was on its way.
@@ -775,11 +889,13 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
         } else {
             store_.acceptResult(jobId, task, attempt, file.string(), payload.size(), stats, unixMs());
             t.state = TaskRuntime::State::Accepted;
-            spp = t.work.image().sample_count();
+            accepted = true;
             leases_.erase(attempt);
             j->retry.erase(task);
-            j->taskSeconds += stats.seconds();
-            ++j->taskCount;
+            if (task >= j->chainFirst) {
+                j->taskSeconds += stats.seconds();
+                ++j->taskCount;
+            }
             if (const auto w = workers_.find(worker); w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
                 wr.attempts.erase(attempt);
@@ -794,11 +910,11 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
             touch();
         }
     }
-    if (spp == 0) return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
+    if (!accepted) return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
     {
         const std::lock_guard<std::mutex> filmLock(j->film.mu);
-        j->film.pending[task] = {file.string(), stats, spp};
-        mergeReady(*j, std::make_optional(std::make_pair(task, std::move(block))));
+        j->film.pending[task] = {file.string(), stats, work};
+        mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
     }
     v1::CompleteReply reply;
     reply.set_accepted(true);
@@ -822,38 +938,80 @@ v1::CompleteReply Master::ignoreResult(const std::string &worker, int64_t attemp
 // Merging, checkpoints, the final image
 
 Bitmap Master::develop(const JobRuntime &j) const {
+    if (j.film.chain) return j.film.chain->job->develop();
     return j.film.film->develop(*j.film.block, 1.0 / static_cast<double>(j.film.spp));
 }
 
-void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, ImageBlock>> fresh) {
+Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec &work, std::string_view payload) const {
+    const Film &film = *j.film.film;
+    const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
+    if (work.has_seeding())
+        return farm::decodeSeedingResult(payload, film,
+                                         SeedingTask{work.seeding().first_pixel(), work.seeding().pixel_count()});
+    if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
+    ImageBlock block = emptyBlock();
+    farm::decodeBlock(payload, block);
+    return block;
+}
+
+void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput output) {
     JobFilm &f = j.film;
-    if (!f.block) return;
+    if (!f.chain) {
+        f.block->merge(std::get<ImageBlock>(output));
+        f.spp += work.image().sample_count();
+        return;
+    }
+    ChainJob &job = *f.chain->job;
+    if (work.has_seeding()) {
+        job.mergeSeeding(std::move(std::get<SeedingResult>(output)));
+    } else if (work.has_chain()) {
+        job.mergeChain(std::get<ChainResult>(output));
+    } else {
+        job.mergeDirect(std::get<ImageBlock>(output), work.image().sample_count());
+    }
+    f.spp = job.mutationsPerPixel();
+}
+
+void Master::startChains(JobRuntime &j) {
+    if (j.seeded) return;
+    const ChainJob &job = *j.film.chain->job;
+    j.seeded = true;
+    const uint64_t count = job.chainTaskCount();
+    if (j.total == 0 && count != UINT64_MAX) j.total = j.chainFirst + static_cast<int64_t>(count);
+    v1::ChainStats *stats = j.record.mutable_chain();
+    stats->set_phase(v1::CHAIN_PHASE_CHAINS);
+    stats->set_luminance(job.normalizer().luminance());
+    stats->set_candidates(job.normalizer().candidates().size());
+    spdlog::info("job={}: seeding merged: b = {:.6g} from {} candidates; {} chain tasks", j.record.id(),
+                 job.normalizer().luminance(), job.normalizer().candidates().size(),
+                 count == UINT64_MAX ? std::string("time budget decides the") : std::to_string(count));
+    workChanged_.notify_all();
+}
+
+void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh) {
+    JobFilm &f = j.film;
+    if (!f.open()) return;
     const int64_t before = f.merged;
     uint64_t samples = 0, rays = 0;
     double seconds = 0, loadSeconds = 0;
     for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
         const auto t0 = Clock::now();
-        if (fresh && fresh->first == f.merged) {
-            f.block->merge(fresh->second);
-        } else {
-            const Film &film = *f.film;
-            ImageBlock stored(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
-            try {
-                farm::decodeBlock(farm::readFile(it->second.file), stored);
-            } catch (const std::exception &e) {
-                // The master's own file is unreadable: the disk failed, and the job cannot be exact.
-                const std::lock_guard<std::mutex> lock(mu_);
-                setState(j, v1::JOB_FAILED, "stored result of task " + std::to_string(f.merged) + ": " + e.what());
-                return;
-            }
-            f.block->merge(stored);
+        const v1::TaskSpec &work = it->second.work;
+        try {
+            mergeOutput(j, work,
+                        fresh && fresh->first == f.merged ? std::move(fresh->second)
+                                                          : decodeOutput(j, work, farm::readFile(it->second.file)));
+        } catch (const std::exception &e) {
+            // The master's own file is unreadable: the disk failed, and the job cannot be exact.
+            const std::lock_guard<std::mutex> lock(mu_);
+            setState(j, v1::JOB_FAILED, "stored result of task " + std::to_string(f.merged) + ": " + e.what());
+            return;
         }
         seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-        f.spp += it->second.spp;
         samples += it->second.stats.samples();
         rays += it->second.stats.rays();
         loadSeconds += it->second.stats.scene_load_seconds();
-        f.mergedSinceCheckpoint.push_back(it->second.file);
+        if (!work.has_seeding()) f.mergedSinceCheckpoint.push_back(it->second.file);
         f.pending.erase(it);
         ++f.merged;
     }
@@ -873,6 +1031,14 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, ImageBlo
         j.record.set_samples(j.record.samples() + samples);
         j.record.set_rays(j.record.rays() + rays);
         j.record.set_worker_scene_load_seconds(j.record.worker_scene_load_seconds() + loadSeconds);
+        if (f.chain) {
+            v1::ChainStats *stats = j.record.mutable_chain();
+            const ChainImage &chains = f.chain->job->chains();
+            stats->set_mutations(chains.mutations);
+            farm::toProto(chains.counts, *stats->mutable_mutation_counts());
+            farm::toProto(chains.counters, *stats->mutable_counters());
+            if (f.chain->job->seeded()) startChains(j);
+        }
         if (preview) j.preview = preview;
         counters_.resultsMerged += f.merged - before;
         counters_.mergeSeconds += seconds;
@@ -896,7 +1062,16 @@ void Master::checkpoint(JobRuntime &j) {
     if (f.merged == f.checkpointed) return;
     const auto start = Clock::now();
     const fs::path file = fs::path(jobDir(j.record.id())) / ("checkpoint-" + std::to_string(f.merged) + ".blk");
-    writeFileAtomic(file, farm::encodeBlock(*f.block), true);
+    if (f.chain) {
+        const ChainJob &job = *f.chain->job;
+        v1::ChainCheckpoint cp;
+        cp.set_direct(farm::encodeBlock(job.direct()));
+        cp.set_direct_samples_per_pixel(job.directSamplesPerPixel());
+        *cp.mutable_chains() = farm::toProto(job.chains());
+        writeFileAtomic(file, cp.SerializeAsString(), true);
+    } else {
+        writeFileAtomic(file, farm::encodeBlock(*f.block), true);
+    }
     v1::Job record;
     {
         const std::lock_guard<std::mutex> lock(mu_);
@@ -919,7 +1094,7 @@ void Master::finishIfComplete(JobRuntime &j) {
     JobFilm &f = j.film;
     {
         const std::lock_guard<std::mutex> lock(mu_);
-        if (j.record.state() != v1::JOB_RUNNING || j.total == 0 || f.merged < j.total || !f.block) return;
+        if (j.record.state() != v1::JOB_RUNNING || j.total == 0 || f.merged < j.total || !f.open()) return;
     }
     // The job's true time ends with its last merge, before the I/O of finishing it.
     const int64_t endMs = unixMs();
@@ -947,12 +1122,13 @@ void Master::finishIfComplete(JobRuntime &j) {
 
 void Master::closeFilm(JobRuntime &j) {
     JobFilm &f = j.film;
-    if (!f.block) return;
+    if (!f.open()) return;
     // What a cancelled or failed job got to stays fetchable; a finished job has its final image already.
     const fs::path image = fs::path(jobDir(j.record.id())) / "image.exr";
     std::error_code ec;
-    if (f.spp > 0 && !fs::exists(image, ec)) writeEXR(image.string(), develop(j));
+    if (f.merged > 0 && !fs::exists(image, ec)) writeEXR(image.string(), develop(j));
     f.block.reset();
+    f.chain.reset();
     f.pending.clear();
     fs::remove_all(fs::path(jobDir(j.record.id())) / "results", ec);
 }

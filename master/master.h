@@ -1,5 +1,9 @@
 // The master's state and scheduling, independent of gRPC: jobs and their tasks, leases with deadlines,
 // retries and blocklists, exact in-order merging of results, checkpoints and recovery after a restart.
+// Image jobs (path, volpath, bdpt) are lists of ImageTasks; Markov-chain jobs (pssmlt, mmlt, mlt, erpt,
+// ...) are the task list of a render/chain_job.h ChainJob: seeding tasks, the direct component's image
+// tasks, then chain tasks, which are formed once the seeding is merged (ARCHITECTURE.md "A job, end to
+// end").
 // The gRPC services (services.cpp) and the HTTP status module call this class; every public method is
 // thread-safe.
 //
@@ -17,6 +21,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "farm/bundle.h"
@@ -24,6 +29,7 @@
 #include "image/film.h"
 #include "pathfarm/v1/client.pb.h"
 #include "pathfarm/v1/worker.pb.h"
+#include "render/chain_job.h"
 #include "store.h"
 
 namespace pf::master {
@@ -120,6 +126,7 @@ public:
 
 private:
     struct JobFilm;
+    struct ChainState;
     struct JobRuntime;
     struct TaskRuntime;
     struct WorkerRuntime;
@@ -131,7 +138,11 @@ private:
 
     void recover();
     void recoverJob(const StoredJob &stored);
-    std::shared_ptr<Film> loadFilm(const JobSpec &spec, pathfarm::v1::Job &record) const;
+    struct Loaded;
+    // Loads the job's scene and integrator from its bundle and fills in the record's scene figures.
+    Loaded load(const JobSpec &spec, pathfarm::v1::Job &record) const;
+    // Sets up the job's film side (the merged film, or the ChainJob) from what load() returned.
+    void openFilm(JobRuntime &j, Loaded loaded);
     void reaperLoop();
 
     // Under mu_.
@@ -145,8 +156,16 @@ private:
     void setState(JobRuntime &j, pathfarm::v1::JobState state, const std::string &error = "");
     void touch();
 
+    // A result payload decoded by its task's kind: the film block of an image task, a seeding result, a
+    // chain result. Throws farm::FarmError when it is corrupt.
+    using TaskOutput = std::variant<ImageBlock, SeedingResult, ChainResult>;
+    TaskOutput decodeOutput(const JobRuntime &j, const pathfarm::v1::TaskSpec &work, std::string_view payload) const;
+
     // Film side: called with the job's film mutex held.
-    void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, ImageBlock>> fresh);
+    void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh);
+    void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
+    // Once the seeding is merged: the chain phase starts (called with both mutexes held).
+    void startChains(JobRuntime &j);
     void checkpoint(JobRuntime &j);
     void finishIfComplete(JobRuntime &j);
     void closeFilm(JobRuntime &j);

@@ -216,9 +216,16 @@ int64_t Store::leaseTask(int64_t job, const TaskSpec &task, bool isNew, const st
     Transaction tx(db_);
     if (isNew) {
         TaskSpec work;
+        const char *kind = task.has_image()     ? "image"
+                           : task.has_seeding() ? "seeding"
+                           : task.has_chain()   ? "chain"
+                                                : "";
         if (task.has_image()) *work.mutable_image() = task.image();
+        if (task.has_seeding()) *work.mutable_seeding() = task.seeding();
+        if (task.has_chain()) *work.mutable_chain() = task.chain();
+        if (!*kind) throw std::runtime_error("store: a task without work");
         Stmt(db_, "INSERT INTO tasks (job_id, idx, kind, work, state) VALUES (?, ?, ?, ?, ?)")
-            .bind(job, task.task_index(), task.has_image() ? "image" : "unknown", serialize(work), task_state::kLeased)
+            .bind(job, task.task_index(), kind, serialize(work), task_state::kLeased)
             .run();
     } else {
         Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?")
@@ -346,12 +353,26 @@ std::vector<StoredAttempt> Store::loadAttempts(int64_t job) {
 }
 
 std::vector<StoredResult> Store::loadUnmergedResults(int64_t job) {
+    return loadResults(
+        "SELECT r.task_idx, r.attempt_id, r.file, r.stats FROM results r JOIN tasks t "
+        "ON t.job_id = r.job_id AND t.idx = r.task_idx WHERE r.job_id = ? AND t.state = ? "
+        "ORDER BY r.task_idx",
+        job, task_state::kAccepted);
+}
+
+std::vector<StoredResult> Store::loadResults(int64_t job, int64_t toTask) {
+    return loadResults(
+        "SELECT task_idx, attempt_id, file, stats FROM results WHERE job_id = ? AND task_idx < ? "
+        "ORDER BY task_idx",
+        job, toTask);
+}
+
+template <class Arg>
+std::vector<StoredResult> Store::loadResults(const char *sql, int64_t job, Arg arg) {
     const std::lock_guard<std::mutex> lock(mu_);
     std::vector<StoredResult> results;
-    Stmt q(db_,
-           "SELECT r.task_idx, r.attempt_id, r.file, r.stats FROM results r JOIN tasks t "
-           "ON t.job_id = r.job_id AND t.idx = r.task_idx WHERE r.job_id = ? AND t.state = ? ORDER BY r.task_idx");
-    q.bind(job, task_state::kAccepted);
+    Stmt q(db_, sql);
+    q.bind(job, arg);
     while (q.step()) {
         StoredResult r{q.integer(0), q.integer(1), q.text(2), {}};
         if (!r.stats.ParseFromString(q.text(3))) throw std::runtime_error("store: corrupt result record");

@@ -91,6 +91,9 @@ public:
     std::vector<StoredTask> loadTasks(int64_t job);
     std::vector<StoredAttempt> loadAttempts(int64_t job);  // all attempts, in id order
     std::vector<StoredResult> loadUnmergedResults(int64_t job);
+    // The results of tasks [0, toTask), merged or not, whose files still exist (results a Markov-chain job
+    // keeps for its lifetime: its seeding).
+    std::vector<StoredResult> loadResults(int64_t job, int64_t toTask);
     std::vector<std::string> loadBlocklist(int64_t job);
     std::vector<WorkerInfo> loadWorkers();
 
@@ -98,6 +101,8 @@ private:
     class Stmt;
     void exec(const char *sql);
     void setJobState(int64_t job, const Job &record);
+    template <class Arg>
+    std::vector<StoredResult> loadResults(const char *sql, int64_t job, Arg arg);
 
     sqlite3 *db_ = nullptr;
     std::mutex mu_;

@@ -14,24 +14,12 @@ namespace {
 namespace v1 = pathfarm::v1;
 using namespace std::chrono_literals;
 
-// Short leases so that killed workers are noticed within a second or two.
-const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "250", "--checkpoint-ms", "300"};
-
-class FarmRender : public ::testing::Test {
+class FarmRender : public FarmTest {
 protected:
-    void SetUp() override {
-        name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-        farm = std::make_unique<Farm>(name);
-    }
     // The embedded render of the same spec, the reference every farm image must equal.
     std::string reference(const std::string &scene, const std::string &args) {
-        const std::string out = farm->dir() + "/reference.exr";
-        const auto [code, output] = farm->cli("render " + scene + " -q " + args + " -o " + out);
-        EXPECT_EQ(code, 0) << output;
-        return out;
+        return farm->embeddedRender(scene, args, "reference");
     }
-    std::string name;
-    std::unique_ptr<Farm> farm;
 };
 
 TEST_F(FarmRender, ThreeWorkersMatchTheEmbeddedRenderBitForBit) {

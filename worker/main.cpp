@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 
+#include "cpu_quota.h"
 #include "farm/health.h"
 #include "worker.h"
 

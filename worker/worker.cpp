@@ -1,19 +1,21 @@
 #include "worker.h"
 
-#include <sched.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
-#include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <random>
 #include <sstream>
+#include <tuple>
 
+#include "cpu_quota.h"
 #include "farm/block_codec.h"
+#include "farm/chain_codec.h"
 #include "farm/convert.h"
 #include "farm/hash.h"
 #include "farm/job_setup.h"
+#include "render/chain_job.h"
+#include "render/seeding.h"
 
 namespace pf::worker {
 
@@ -22,43 +24,12 @@ namespace v1 = pathfarm::v1;
 
 namespace {
 
-// ceil(quota / period) from a cgroup v2 cpu.max ("max 100000" or "200000 100000") or the v1 pair of
-// files; 0 when there is no quota.
-int cgroupQuota() {
-    std::string path = "/";
-    {
-        std::ifstream self("/proc/self/cgroup");
-        for (std::string line; std::getline(self, line);)
-            if (line.rfind("0::", 0) == 0) path = line.substr(3);
-    }
-    for (const std::string &dir : {"/sys/fs/cgroup" + path, std::string("/sys/fs/cgroup")}) {
-        std::ifstream in(dir + "/cpu.max");
-        std::string quota;
-        double period = 0;
-        if (in >> quota >> period && quota != "max" && period > 0)
-            return static_cast<int>(std::ceil(std::stod(quota) / period));
-        if (in) return 0;
-    }
-    std::ifstream q("/sys/fs/cgroup/cpu/cpu.cfs_quota_us"), p("/sys/fs/cgroup/cpu/cpu.cfs_period_us");
-    double quota = -1, period = 0;
-    if (q >> quota && p >> period && quota > 0 && period > 0) return static_cast<int>(std::ceil(quota / period));
-    return 0;
-}
-
 bool retryable(const grpc::Status &s) {
     return s.error_code() == grpc::StatusCode::UNAVAILABLE || s.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED ||
            s.error_code() == grpc::StatusCode::CANCELLED;
 }
 
 }  // namespace
-
-int availableCores() {
-    cpu_set_t set;
-    int cores = sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 0;
-    if (cores <= 0) cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    const int quota = cgroupQuota();
-    return quota > 0 ? std::max(1, std::min(cores, quota)) : cores;
-}
 
 Worker::Worker(WorkerConfig config)
     : cfg_(std::move(config)),
@@ -71,6 +42,8 @@ Worker::~Worker() {
     changed_.notify_all();
     if (heartbeatThread_.joinable()) heartbeatThread_.join();
     if (uploadThread_.joinable()) uploadThread_.join();
+    for (std::thread &t : runners_)
+        if (t.joinable()) t.join();
 }
 
 std::unique_ptr<grpc::ClientContext> Worker::context(std::chrono::milliseconds timeout) const {
@@ -151,18 +124,42 @@ int Worker::run() {
     registerWithMaster();
     heartbeatThread_ = std::thread([this] { heartbeatLoop(); });
     uploadThread_ = std::thread([this] { uploadLoop(); });
+    for (int i = 0; i < cfg_.threads; ++i) runners_.emplace_back([this] { runnerLoop(); });
+    const auto idle = [&] { return (queued_.empty() && running_ == 0) || stopping_; };
     while (!draining_ && !stopping_) {
-        if (const auto task = leaseTask()) work(*task);
+        {
+            // A lease is taken only when a thread is free for it.
+            std::unique_lock<std::mutex> lock(mu_);
+            changed_.wait(lock, [&] {
+                return static_cast<int>(queued_.size()) + running_ < cfg_.threads || draining_ || stopping_;
+            });
+        }
+        const auto task = leaseTask();
+        if (!task) continue;
+        hold(task->attempt_id());
+        std::unique_lock<std::mutex> lock(mu_);
+        if (task->has_image()) {
+            // An image task renders on every thread: it waits for the single-threaded tasks in hand.
+            changed_.wait(lock, idle);
+            lock.unlock();
+            work(*task, cfg_.threads);
+        } else {
+            queued_.push_back(*task);
+            changed_.notify_all();
+        }
     }
-    spdlog::info("worker={}: draining: finishing the uploads in progress", workerId());
+    spdlog::info("worker={}: draining: finishing the tasks and uploads in progress", workerId());
     {
         std::unique_lock<std::mutex> lock(mu_);
+        changed_.wait(lock, idle);
         changed_.wait(lock, [&] { return (uploads_.empty() && !uploading_) || stopping_; });
     }
     stopping_ = true;
     changed_.notify_all();
     heartbeatThread_.join();
     uploadThread_.join();
+    for (std::thread &t : runners_) t.join();
+    runners_.clear();
     spdlog::info("worker={}: drained", workerId());
     return 0;
 }
@@ -198,27 +195,37 @@ std::optional<v1::TaskSpec> Worker::leaseTask() {
     return std::nullopt;
 }
 
-void Worker::work(const v1::TaskSpec &task) {
+void Worker::runnerLoop() {
+    for (;;) {
+        std::unique_lock<std::mutex> lock(mu_);
+        changed_.wait(lock, [&] { return !queued_.empty() || stopping_; });
+        if (queued_.empty()) return;
+        const v1::TaskSpec task = std::move(queued_.front());
+        queued_.pop_front();
+        ++running_;
+        lock.unlock();
+        work(task, 1);
+        lock.lock();
+        --running_;
+        changed_.notify_all();
+    }
+}
+
+void Worker::work(const v1::TaskSpec &task, int threads) {
     const int64_t attempt = task.attempt_id();
-    hold(attempt);
-    spdlog::info("job={} task={} attempt={} worker={}: rendering samples [{}, {})", task.job_id(), task.task_index(),
-                 attempt, workerId(), task.image().first_sample(),
-                 task.image().first_sample() + task.image().sample_count());
+    spdlog::info("job={} task={} attempt={} worker={}: rendering {}", task.job_id(), task.task_index(), attempt,
+                 workerId(), farm::describeWork(task));
     if (cfg_.failEveryTask) {
         failTask(attempt, "injected fault (--fail-every-task)");
         return;
     }
-    std::optional<ImageTaskResult> result;
-    double loadSeconds = 0;
+    std::optional<Result> result;
     try {
-        if (!task.has_image()) throw std::runtime_error("this worker cannot run the task kind it was given");
         const auto t0 = std::chrono::steady_clock::now();
-        const Prepared &p = prepare(task);
-        loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const auto *integrator = dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
-        if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
-        result.emplace(runImageTask(*p.scene, *integrator, task.job().seed(),
-                                    ImageTask{task.image().first_sample(), task.image().sample_count()}, cfg_.threads));
+        const std::shared_ptr<const Prepared> p = prepare(task);
+        const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        result.emplace(runTask(*p, task, threads));
+        result->loadSeconds = loadSeconds;
     } catch (const std::exception &e) {
         failTask(attempt, e.what());
         return;
@@ -229,14 +236,46 @@ void Worker::work(const v1::TaskSpec &task) {
         release(attempt);
         return;
     }
-    // One result waits while the previous one uploads; rendering the next task overlaps the upload.
+    // Results wait while earlier ones upload; rendering the next tasks overlaps the uploads.
     std::unique_lock<std::mutex> lock(mu_);
-    changed_.wait(lock, [&] { return uploads_.empty() || stopping_; });
-    uploads_.push_back(Result{attempt, std::move(*result), loadSeconds});
+    changed_.wait(lock, [&] { return static_cast<int>(uploads_.size()) < cfg_.threads || stopping_; });
+    uploads_.push_back(std::move(*result));
     changed_.notify_all();
 }
 
-const Worker::Prepared &Worker::prepare(const v1::TaskSpec &task) {
+Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int threads) const {
+    const uint64_t seed = task.job().seed();
+    const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
+    if ((task.has_seeding() || task.has_chain() || task.image().direct()) && !chain)
+        throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no seeding or chain tasks");
+    Result r{task.attempt_id(), {}, 0, 0, 0, 0};
+    if (task.has_seeding()) {
+        const SeedingResult s = runSeedingTask(*p.scene, chain->seeding(*p.scene), seed,
+                                               SeedingTask{task.seeding().first_pixel(), task.seeding().pixel_count()});
+        r.payload = farm::encodeSeedingResult(s);
+        std::tie(r.samples, r.rays, r.seconds) = std::tuple(s.samples, s.rays, s.seconds);
+    } else if (task.has_chain()) {
+        const ChainResult c = runChainTask(*p.scene, *chain, seed, farm::fromProto(task.chain()));
+        r.payload = farm::encodeChainResult(c);
+        std::tie(r.samples, r.rays, r.seconds) = std::tuple(c.mutations, c.rays, c.seconds);
+    } else if (task.has_image()) {
+        // A chain job's direct component renders with its own integrator and seed (render/chain_job.h).
+        const bool direct = task.image().direct();
+        const auto *integrator =
+            direct ? chain->directIntegrator() : dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
+        if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
+        const ImageTaskResult i =
+            runImageTask(*p.scene, *integrator, direct ? directComponentSeed(seed) : seed,
+                         ImageTask{task.image().first_sample(), task.image().sample_count()}, threads);
+        r.payload = farm::encodeBlock(i.block);
+        std::tie(r.samples, r.rays, r.seconds) = std::tuple(i.samples, i.rays, i.seconds);
+    } else {
+        throw std::runtime_error("this worker cannot run the task kind it was given");
+    }
+    return r;
+}
+
+std::shared_ptr<const Worker::Prepared> Worker::prepare(const v1::TaskSpec &task) {
     // Everything that shapes the scene or the integrator, and nothing else, forms the cache key.
     v1::JobSpec keySpec;
     keySpec.set_bundle_hash(task.job().bundle_hash());
@@ -244,22 +283,24 @@ const Worker::Prepared &Worker::prepare(const v1::TaskSpec &task) {
     *keySpec.mutable_params() = task.job().params();
     *keySpec.mutable_defines() = task.job().defines();
     const std::string key = keySpec.SerializeAsString() + task.scene_file();
-    if (prepared_ && prepared_->key == key) return *prepared_;
+    const std::lock_guard<std::mutex> lock(prepareMu_);
+    if (prepared_ && prepared_->key == key) return prepared_;
     prepared_.reset();
     if (!cache_.has(task.job().bundle_hash())) fetchBundle(task.job().bundle_hash());
     const v1::BundleManifest manifest = cache_.manifest(task.job().bundle_hash());
     if (manifest.scene_file() != task.scene_file())
         throw std::runtime_error("bundle " + task.job().bundle_hash() + " has no scene '" + task.scene_file() + "'");
     const auto t0 = std::chrono::steady_clock::now();
-    Prepared p{key,
-               loadScene((fs::path(cache_.dir(task.job().bundle_hash())) / task.scene_file()).string(),
-                         farm::toNameValues(task.job().defines())),
-               nullptr};
-    p.integrator = makeIntegrator(*p.scene, task.job().integrator(), farm::toNameValues(task.job().params()));
+    auto p = std::make_shared<Prepared>(
+        Prepared{key,
+                 loadScene((fs::path(cache_.dir(task.job().bundle_hash())) / task.scene_file()).string(),
+                           farm::toNameValues(task.job().defines())),
+                 nullptr});
+    p->integrator = makeIntegrator(*p->scene, task.job().integrator(), farm::toNameValues(task.job().params()));
     spdlog::info("job={}: scene {} loaded in {:.2f} s", task.job_id(), task.scene_file(),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     prepared_ = std::move(p);
-    return *prepared_;
+    return prepared_;
 }
 
 void Worker::fetchBundle(const std::string &hash) {
@@ -299,7 +340,7 @@ void Worker::failTask(int64_t attempt, const std::string &error) {
 }
 
 void Worker::upload(const Result &r) {
-    const std::string payload = farm::encodeBlock(r.result.block);
+    const std::string &payload = r.payload;
     const std::string hash = farm::hashHex64(payload);
     const size_t chunk = static_cast<size_t>(std::max(4096, cfg_.maxMessageBytes - 4096));
     for (int step = 0; !isLost(r.attempt);) {
@@ -310,9 +351,9 @@ void Worker::upload(const Result &r) {
         auto *h = c.mutable_header();
         h->set_worker_id(workerId());
         h->set_attempt_id(r.attempt);
-        h->mutable_stats()->set_samples(r.result.samples);
-        h->mutable_stats()->set_rays(r.result.rays);
-        h->mutable_stats()->set_seconds(r.result.seconds);
+        h->mutable_stats()->set_samples(r.samples);
+        h->mutable_stats()->set_rays(r.rays);
+        h->mutable_stats()->set_seconds(r.seconds);
         h->mutable_stats()->set_scene_load_seconds(r.loadSeconds);
         h->set_payload_size(payload.size());
         h->set_payload_hash(hash);
@@ -327,7 +368,7 @@ void Worker::upload(const Result &r) {
         if (s.ok()) {
             if (reply.accepted()) {
                 spdlog::info("attempt={} worker={}: result accepted ({} bytes, {:.2f} s)", r.attempt, workerId(),
-                             payload.size(), r.result.seconds);
+                             payload.size(), r.seconds);
             } else {
                 spdlog::warn("attempt={} worker={}: result ignored: {}", r.attempt, workerId(), reply.reason());
             }

@@ -1,5 +1,6 @@
-// The worker: registers with the master, pulls one task at a time, renders it with all its threads and
-// streams the film block back while it renders the next one. Leases are renewed by a heartbeat thread;
+// The worker: registers with the master and pulls tasks. An image task renders on all its threads; seeding
+// and chain tasks run one per thread (a chain is sequential), so the worker holds up to --threads of them
+// at once. Results stream back while the next tasks run. Leases are renewed by a heartbeat thread;
 // scenes are cached by bundle hash (on disk) and the last loaded scene is kept in memory. When the
 // master is away every call is retried with backoff, so a restarted master finds its workers again.
 #pragma once
@@ -12,6 +13,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "farm/bundle.h"
 #include "farm/rpc.h"
@@ -34,9 +36,6 @@ struct WorkerConfig {
     bool failEveryTask = false;
 };
 
-// The cores this process may use: its CPU affinity, further limited by a cgroup CPU quota (containers).
-int availableCores();
-
 class Worker {
 public:
     explicit Worker(WorkerConfig config);
@@ -52,7 +51,9 @@ public:
 private:
     struct Result {
         int64_t attempt;
-        ImageTaskResult result;
+        std::string payload;  // by task kind (see TaskSpec in common.proto)
+        uint64_t samples, rays;
+        double seconds;
         double loadSeconds;  // preparing the scene for this task
     };
     struct Prepared {
@@ -63,8 +64,12 @@ private:
 
     void registerWithMaster();
     std::optional<pathfarm::v1::TaskSpec> leaseTask();
-    void work(const pathfarm::v1::TaskSpec &task);
-    const Prepared &prepare(const pathfarm::v1::TaskSpec &task);
+    // Runs a task (held already) on `threads` threads and queues its result for upload.
+    void work(const pathfarm::v1::TaskSpec &task, int threads);
+    Result runTask(const Prepared &p, const pathfarm::v1::TaskSpec &task, int threads) const;
+    // Runs the queued single-threaded tasks (seeding, chains), one at a time.
+    void runnerLoop();
+    std::shared_ptr<const Prepared> prepare(const pathfarm::v1::TaskSpec &task);
     void fetchBundle(const std::string &hash);
     void failTask(int64_t attempt, const std::string &error);
     void upload(const Result &r);
@@ -84,7 +89,8 @@ private:
     std::shared_ptr<grpc::Channel> channel_;
     std::unique_ptr<pathfarm::v1::WorkerService::Stub> stub_;
     farm::BundleStore cache_;
-    std::optional<Prepared> prepared_;
+    std::mutex prepareMu_;  // one scene load at a time; guards prepared_
+    std::shared_ptr<const Prepared> prepared_;
 
     mutable std::mutex mu_;
     std::condition_variable changed_;
@@ -93,6 +99,9 @@ private:
     std::set<int64_t> held_, lost_;
     std::deque<Result> uploads_;
     bool uploading_ = false;
+    std::deque<pathfarm::v1::TaskSpec> queued_;  // single-threaded tasks waiting for a runner
+    int running_ = 0;                            // single-threaded tasks running
+    std::vector<std::thread> runners_;
     grpc::ClientContext *leaseCall_ = nullptr;  // cancelled by drain()
     std::atomic<bool> draining_{false}, stopping_{false};
     std::thread heartbeatThread_, uploadThread_;

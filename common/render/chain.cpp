@@ -1,6 +1,6 @@
-// Chain tasks, and the embedded renderer of Markov-chain integrators: the direct component (if any), the
-// seeding tasks, the normalizer, then waves of chain tasks (one task per core), merged in task order so
-// that the image does not depend on the thread count (ARCHITECTURE.md "A job, end to end").
+// Chain tasks, and the embedded renderer of Markov-chain integrators: the tasks of a ChainJob (seeding,
+// the direct component, then waves of chain tasks, one task per core), merged in task order so that the
+// image does not depend on the thread count (ARCHITECTURE.md "A job, end to end").
 #include "render/chain.h"
 
 #include <algorithm>
@@ -9,8 +9,7 @@
 #include <optional>
 #include <thread>
 
-#include "render/image_task.h"
-#include "render/normalizer.h"
+#include "render/chain_job.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -20,7 +19,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr uint64_t kChainStream = 0xc4a1ULL;
-constexpr uint64_t kDirectSeedTag = 0xd12ec7ULL;
 constexpr uint64_t kMinTaskMutations = 1u << 14;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -84,41 +82,30 @@ ChainTask ChainIntegrator::chainTask(const Scene &scene, const Normalizer &norma
 
 Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
     const auto start = Clock::now();
-    const Film &film = scene.sensor().film();
     const int threads =
         opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-
-    std::optional<Bitmap> direct;
-    if (const SamplingIntegrator *d = directIntegrator(); d && directSamples() > 0) {
-        RenderOptions o;
-        o.spp = directSamples();
-        o.seed = hashCombine(opt.seed, kDirectSeedTag);
-        o.threads = threads;
-        RenderStats s;
-        direct = d->render(scene, o, s);
-        stats.rays += s.rays;
-    }
-
-    const SeedingConfig config = seeding(scene);
-    const std::vector<SeedingTask> seedingPlan = seedingTasks(scene);
-    std::vector<SeedingResult> seeds(seedingPlan.size());
-    parallelFor(seedingPlan.size(), threads,
-                [&](size_t i) { seeds[i] = runSeedingTask(scene, config, opt.seed, seedingPlan[i]); });
-    for (const SeedingResult &r : seeds) stats.rays += r.rays;
-    const Normalizer normalizer(std::move(seeds));
-
     // Under a time budget the clock decides whether another wave of whole chains starts, never when a chain
     // stops (ALGORITHMS.md §2.5).
     const bool timed = opt.timeLimit > 0;
     const int64_t spp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
-    const uint64_t count = normalizer.luminance() > 0 ? (timed ? UINT64_MAX : chainTaskCount(scene, spp)) : 0;
-    ChainImage image(makeFilmBlock(scene));
-    const auto develop = [&]() {
-        Bitmap img = developChains(film, image, chainKind(), normalizer.luminance());
-        if (direct)
-            for (size_t i = 0; i < img.rgb.size(); ++i) img.rgb[i] += direct->rgb[i];
-        return img;
-    };
+    ChainJob job(scene, *this, opt.seed, spp);
+
+    // The job's tasks in its merge order (render/chain_job.h): seeding, direct component, chains.
+    std::vector<SeedingResult> seeds(job.seedingTaskCount());
+    parallelFor(seeds.size(), threads,
+                [&](size_t i) { seeds[i] = runSeedingTask(scene, job.seedingConfig(), opt.seed, job.seedingTask(i)); });
+    for (SeedingResult &r : seeds) {
+        stats.rays += r.rays;
+        job.mergeSeeding(std::move(r));
+    }
+    for (uint64_t t = job.seedingTaskCount(); t < job.firstChainTask(); ++t) {
+        const ImageTaskResult r =
+            runImageTask(scene, *directIntegrator(), job.directSeed(), job.directTask(t), threads);
+        stats.rays += r.rays;
+        job.mergeDirect(r.block, job.directTask(t).sampleCount);
+    }
+
+    const uint64_t count = job.chainTaskCount();
     double lastWave = 0;
     for (uint64_t next = 0; next < count;) {
         if (timed && next > 0 && secondsSince(start) + lastWave > opt.timeLimit) break;
@@ -126,20 +113,21 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
         const size_t n = static_cast<size_t>(std::min<uint64_t>(static_cast<uint64_t>(threads), count - next));
         std::vector<std::optional<ChainResult>> results(n);
         parallelFor(n, threads, [&](size_t i) {
-            results[i] = runChainTask(scene, *this, opt.seed, chainTask(scene, normalizer, opt.seed, spp, next + i));
+            results[i] = runChainTask(scene, *this, opt.seed, job.chainTask(job.firstChainTask() + next + i));
         });
-        for (const auto &r : results) mergeChainResult(image, *r);
+        for (const auto &r : results) job.mergeChain(*r);
         next += n;
         lastWave = secondsSince(waveStart);
-        if (opt.onPass) opt.onPass(static_cast<int64_t>(image.mutations / cropPixels(scene)), develop());
+        if (opt.onPass) opt.onPass(job.mutationsPerPixel(), job.develop());
     }
+    const ChainImage &image = job.chains();
     stats.rays += image.rays;
     stats.samples = image.mutations;
     stats.counts = image.counts;
     stats.counters = image.counters;
-    stats.samplesPerPixel = static_cast<int64_t>(image.mutations / cropPixels(scene));
+    stats.samplesPerPixel = job.mutationsPerPixel();
     stats.seconds = secondsSince(start);
-    return develop();
+    return job.develop();
 }
 
 }  // namespace pf

@@ -12,9 +12,15 @@ namespace pf {
 namespace {
 
 constexpr int kTileSize = 32;
-// Samples per pixel in one task: small enough for a responsive progress bar, live preview and
-// fine-grained farm scheduling, large enough that per-task tile allocation and merging are negligible.
-constexpr int64_t kMaxSamplesPerTask = 8;
+// Samples per pixel in one task. A task's cost to the farm's master (decoding and merging a film, bytes on
+// the wire) does not depend on its samples, so tasks grow as a job progresses: the first samples come in
+// small tasks (a responsive progress bar and live preview, fine-grained scheduling, cheap retries), and
+// later each task is the largest power of two up to 1/8 of the samples before it, so that a long job's
+// task count grows only logarithmically until the largest size. The sizes depend on the first sample
+// alone, so every budget, a time budget included, takes a prefix of the same sequence of tasks.
+constexpr int64_t kMinSamplesPerTask = 8;
+constexpr int64_t kMaxSamplesPerTask = 256;
+constexpr int64_t kGrowthDivisor = 8;
 
 struct Tile {
     int x, y, w, h;
@@ -35,7 +41,11 @@ ImageBlock makeFilmBlock(const Scene &scene) {
     return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
 }
 
-int64_t imageTaskSize(int64_t spp, int64_t firstSample) { return std::min(kMaxSamplesPerTask, spp - firstSample); }
+int64_t imageTaskSize(int64_t spp, int64_t firstSample) {
+    int64_t size = kMinSamplesPerTask;
+    while (size < kMaxSamplesPerTask && 2 * size <= firstSample / kGrowthDivisor) size *= 2;
+    return std::min(size, spp - firstSample);
+}
 
 ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
                              const ImageTask &task, int threads) {
@@ -57,8 +67,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
             const Tile &t = tiles[i];
             for (int y = t.y; y < t.y + t.h; ++y)
                 for (int x = t.x; x < t.x + t.w; ++x) {
-                    const uint64_t pixel =
-                        static_cast<uint64_t>(film.cropY() + y) * film.width() + film.cropX() + x;
+                    const uint64_t pixel = static_cast<uint64_t>(film.cropY() + y) * film.width() + film.cropX() + x;
                     for (int64_t s = task.firstSample; s < task.firstSample + task.sampleCount; ++s) {
                         sampler.start(seed, pixel, static_cast<uint64_t>(s));
                         const Vec2 raster = Vec2(x, y) + sampler.next2D();

@@ -31,7 +31,8 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
 ImageBlock makeFilmBlock(const Scene &scene);
 
 // Splits a budget of `spp` samples per pixel into the fixed task sizes used by both the embedded
-// renderer and the farm (so that their images agree bitwise).
+// renderer and the farm (so that their images agree bitwise): the size of the task that starts at
+// `firstSample` (8 up to sample 128, then growing with the samples before it up to 256).
 int64_t imageTaskSize(int64_t spp, int64_t firstSample);
 
 }  // namespace pf

@@ -11,6 +11,10 @@ namespace pf::farm {
 std::string stateName(pathfarm::v1::JobState s);
 std::string stateName(pathfarm::v1::WorkerState s);
 
+// What a task does, for logs: "samples [0, 8)", "direct component, samples [0, 8)", "seeding pixels
+// [0, 4096)", "chain task 3, 1 chains of 16384 mutations".
+std::string describeWork(const pathfarm::v1::TaskSpec &work);
+
 // A job's parameters or definitions as the renderer takes them.
 NameValues toNameValues(const google::protobuf::RepeatedPtrField<pathfarm::v1::Param> &params);
 

@@ -136,6 +136,19 @@ int freePort() {
     return ntohs(addr.sin_port);
 }
 
+const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "250", "--checkpoint-ms", "300"};
+
+void FarmTest::SetUp() {
+    farm = std::make_unique<Farm>(::testing::UnitTest::GetInstance()->current_test_info()->name());
+}
+
+std::string Farm::embeddedRender(const std::string &scene, const std::string &args, const std::string &name) const {
+    const std::string out = dir_ + "/" + name + ".exr";
+    const auto [code, output] = cli("render " + scene + " -q " + args + " -o " + out);
+    EXPECT_EQ(code, 0) << output;
+    return out;
+}
+
 Farm::Farm(const std::string &name) : dir_(tempDir("farm-" + name)), port_(freePort()) {
     std::random_device rd;
     auto token = [&] {

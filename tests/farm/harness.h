@@ -2,6 +2,7 @@
 // their own token files and data directories, killed with real signals, and a gRPC client to talk to
 // the master the way the CLI does.
 #pragma once
+#include <gtest/gtest.h>
 #include <sys/types.h>
 
 #include <chrono>
@@ -55,6 +56,10 @@ bool waitUntil(const std::function<bool()> &done, std::chrono::milliseconds time
 // A port on 127.0.0.1 that was free a moment ago.
 int freePort();
 
+// Master flags for tests that kill processes: short leases, so that a killed worker is noticed within a
+// second or two, and frequent checkpoints.
+extern const std::vector<std::string> kFastLeases;
+
 // One farm: a directory with token files, a master address, and the processes of the test.
 class Farm {
 public:
@@ -83,6 +88,9 @@ public:
 
     // The `pathfarm` CLI with PATHFARM_MASTER and PATHFARM_TOKEN set for this farm: output and exit code.
     std::pair<int, std::string> cli(const std::string &args) const;
+    // The embedded render `pathfarm render SCENE -q ARGS`, the reference a farm job's image must equal, into
+    // DIR/NAME.exr; returns its path and fails the test if the render fails.
+    std::string embeddedRender(const std::string &scene, const std::string &args, const std::string &name) const;
     // Waits until the job is done (or failed/cancelled) and returns it; fails the test on timeout.
     pathfarm::v1::Job waitForJob(int64_t id, std::chrono::seconds timeout) const;
 
@@ -97,6 +105,13 @@ private:
     std::unique_ptr<Process> master_;
     std::vector<std::unique_ptr<Process>> workers_;
     int masterStarts_ = 0;
+};
+
+// A fixture with one farm per test, named after the test.
+class FarmTest : public ::testing::Test {
+protected:
+    void SetUp() override;
+    std::unique_ptr<Farm> farm;
 };
 
 }  // namespace pf::test::farm

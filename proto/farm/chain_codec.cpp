@@ -1,0 +1,180 @@
+#include "farm/chain_codec.h"
+
+#include <cmath>
+
+#include "farm/block_codec.h"
+#include "farm/error.h"
+
+namespace pf::farm {
+
+namespace v1 = pathfarm::v1;
+
+namespace {
+
+void addRecord(v1::PathRecords &out, const PathRecord &r, double weight) {
+    out.add_pixel(r.pixel);
+    out.add_sample_index(r.sampleIndex);
+    out.add_s(r.s);
+    out.add_t(r.t);
+    out.add_weight(weight);
+}
+
+// Calls fn(record, weight) for every record, after checking the columns.
+template <class Fn>
+void forEachRecord(const v1::PathRecords &in, const char *what, const Fn &fn) {
+    const int n = in.pixel_size();
+    if (in.sample_index_size() != n || in.s_size() != n || in.t_size() != n || in.weight_size() != n)
+        throw FarmError(std::string(what) + ": path record columns of unequal length");
+    for (int i = 0; i < n; ++i) {
+        if (!std::isfinite(in.weight(i)) || in.weight(i) < 0 || in.s(i) < 0 || in.t(i) < 1)
+            throw FarmError(std::string(what) + ": path record " + std::to_string(i) + " has a bad strategy or weight");
+        fn(PathRecord{in.pixel(i), in.sample_index(i), in.s(i), in.t(i)}, in.weight(i));
+    }
+}
+
+std::vector<double> finiteValues(const google::protobuf::RepeatedField<double> &in, const char *what) {
+    for (const double v : in)
+        if (!std::isfinite(v)) throw FarmError(std::string(what) + ": non-finite luminance");
+    return {in.begin(), in.end()};
+}
+
+template <class Msg>
+Msg parse(std::string_view payload, const char *what) {
+    Msg msg;
+    if (!msg.ParseFromArray(payload.data(), static_cast<int>(payload.size())))
+        throw FarmError(std::string(what) + ": corrupt payload");
+    return msg;
+}
+
+MutationCounts fromProto(const google::protobuf::RepeatedPtrField<v1::MutationCount> &in) {
+    MutationCounts out;
+    for (const v1::MutationCount &c : in) out.push_back({c.name(), c.proposed(), c.accepted()});
+    return out;
+}
+
+ChainCounters fromProto(const google::protobuf::RepeatedPtrField<v1::ChainCounter> &in) {
+    ChainCounters out;
+    for (const v1::ChainCounter &c : in) {
+        if (!std::isfinite(c.value())) throw FarmError("chain result: non-finite counter '" + c.name() + "'");
+        out.push_back({c.name(), c.value(), c.maximum() ? ChainCounter::Merge::Max : ChainCounter::Merge::Sum});
+    }
+    return out;
+}
+
+template <class Figures>
+v1::ChainOutput chainOutput(const Figures &r) {
+    v1::ChainOutput out;
+    out.set_film(encodeBlock(r.film));
+    out.set_mutations(r.mutations);
+    toProto(r.counts, *out.mutable_counts());
+    toProto(r.counters, *out.mutable_counters());
+    out.set_rays(r.rays);
+    out.set_seconds(r.seconds);
+    return out;
+}
+
+template <class Figures>
+void readChainOutput(const v1::ChainOutput &in, Figures &r) {
+    decodeBlock(in.film(), r.film);
+    r.mutations = in.mutations();
+    r.counts = fromProto(in.counts());
+    r.counters = fromProto(in.counters());
+    r.rays = in.rays();
+    r.seconds = in.seconds();
+}
+
+}  // namespace
+
+v1::ChainTask toProto(const ChainTask &task) {
+    v1::ChainTask out;
+    out.set_index(task.index);
+    for (const ChainSeed &s : task.seeds) addRecord(*out.mutable_seeds(), s.record, s.weight);
+    out.set_mutations(task.mutations);
+    for (const double l : task.depthLuminance) out.add_depth_luminance(l);
+    return out;
+}
+
+ChainTask fromProto(const v1::ChainTask &task) {
+    ChainTask out;
+    out.index = task.index();
+    forEachRecord(task.seeds(), "chain task", [&](const PathRecord &r, double weight) {
+        out.seeds.push_back({r, weight});
+    });
+    out.mutations = task.mutations();
+    out.depthLuminance = finiteValues(task.depth_luminance(), "chain task");
+    return out;
+}
+
+std::string encodeSeedingResult(const SeedingResult &result) {
+    v1::SeedingOutput out;
+    for (const SeedCandidate &c : result.candidates) addRecord(*out.mutable_candidates(), c.record, c.weight);
+    for (const double l : result.depthLuminance) out.add_depth_luminance(l);
+    out.set_samples(result.samples);
+    out.set_rays(result.rays);
+    out.set_seconds(result.seconds);
+    return out.SerializeAsString();
+}
+
+SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, const SeedingTask &task) {
+    const auto in = parse<v1::SeedingOutput>(payload, "seeding result");
+    SeedingResult out;
+    // Candidates name the pixel whose sample generated them (light-tracing ones too), which must be one
+    // of the task's, in order: the normalizer relies on the pool running in pixel order.
+    const uint64_t width = static_cast<uint64_t>(film.width());
+    uint64_t previous = task.firstPixel;
+    forEachRecord(in.candidates(), "seeding result", [&](const PathRecord &r, double weight) {
+        const int64_t x = static_cast<int64_t>(r.pixel % width) - film.cropX(),
+                      y = static_cast<int64_t>(r.pixel / width) - film.cropY();
+        const uint64_t crop =
+            static_cast<uint64_t>(y) * static_cast<uint64_t>(film.cropWidth()) + static_cast<uint64_t>(x);
+        if (x < 0 || y < 0 || x >= film.cropWidth() || y >= film.cropHeight() || crop < previous ||
+            crop >= task.firstPixel + task.pixelCount)
+            throw FarmError("seeding result: a candidate's pixel lies outside the task or out of order");
+        previous = crop;
+        out.candidates.push_back({r, weight});
+    });
+    out.depthLuminance = finiteValues(in.depth_luminance(), "seeding result");
+    out.samples = in.samples();
+    out.rays = in.rays();
+    out.seconds = in.seconds();
+    return out;
+}
+
+v1::ChainOutput toProto(const ChainImage &chains) { return chainOutput(chains); }
+
+std::string encodeChainResult(const ChainResult &result) { return chainOutput(result).SerializeAsString(); }
+
+ChainResult decodeChainResult(std::string_view payload, ImageBlock film) {
+    ChainResult out{std::move(film), 0, {}, {}, 0, 0};
+    readChainOutput(parse<v1::ChainOutput>(payload, "chain result"), out);
+    return out;
+}
+
+ChainImage fromProto(const v1::ChainOutput &chains, ImageBlock film) {
+    ChainImage out(std::move(film));
+    readChainOutput(chains, out);
+    return out;
+}
+
+void toProto(const MutationCounts &counts, google::protobuf::RepeatedPtrField<v1::MutationCount> &out) {
+    out.Clear();
+    for (const MutationCount &c : counts) {
+        v1::MutationCount *m = out.Add();
+        m->set_name(c.name);
+        m->set_proposed(c.proposed);
+        m->set_accepted(c.accepted);
+        m->set_acceptance(c.proposed > 0 ? static_cast<double>(c.accepted) / static_cast<double>(c.proposed) : 0.0);
+    }
+}
+
+void toProto(const ChainCounters &counters, google::protobuf::RepeatedPtrField<v1::ChainCounter> &out) {
+    out.Clear();
+    for (const ChainCounter &c : counters) {
+        v1::ChainCounter *m = out.Add();
+        m->set_name(c.name);
+        m->set_value(c.value);
+        m->set_maximum(c.merge == ChainCounter::Merge::Max);
+    }
+}
+
+}  // namespace pf::farm

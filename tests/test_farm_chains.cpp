@@ -1,0 +1,158 @@
+// Markov-chain jobs on the farm (ARCHITECTURE.md "A job, end to end"): seeding tasks, the normalizer,
+// chain tasks and the direct component, with real master and worker processes on loopback. The farm
+// image equals the embedded `pathfarm render` of the same spec and seed bit for bit (every component is
+// merged in task order on both sides), also when a worker is killed (SIGKILL) inside a chain task and the
+// master is killed and restarted in the chain phase; no task is merged twice.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "farm/harness.h"
+#include "image/bitmap.h"
+
+namespace pf::test::farm {
+namespace {
+
+namespace v1 = pathfarm::v1;
+using namespace std::chrono_literals;
+
+class FarmChains : public FarmTest {
+protected:
+    // Every task of the job was merged exactly once (the store's merges name each task once).
+    void expectMergedOnce(int64_t id, int64_t tasks) {
+        const std::string job = std::to_string(id);
+        EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM merges WHERE job_id = " + job), tasks);
+        EXPECT_EQ(farm->queryStore("SELECT COUNT(DISTINCT task_idx) FROM merges WHERE job_id = " + job), tasks);
+        EXPECT_EQ(farm->queryStore("SELECT MAX(task_idx) FROM merges WHERE job_id = " + job), tasks - 1);
+    }
+};
+
+struct Case {
+    const char *integrator;
+    const char *args;
+};
+
+// 80 x 80 pixels: two seeding tasks (4096 pixels each), a direct component of 4 samples per pixel in one
+// image task, and chain tasks of 16384 mutations. ERPT's seeds per pixel are the scene's sampleCount (8).
+const Case kCases[] = {
+    {"pssmlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
+    {"mlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
+    {"erpt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4 -P chainLength=20 -P numChains=0.5"},
+};
+
+TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 80, 8);
+    farm->startMaster(kFastLeases);
+    farm->startWorker(2);
+    farm->startWorker(1);
+    for (const Case &c : kCases) {
+        SCOPED_TRACE(c.integrator);
+        const std::string spec = std::string("--integrator ") + c.integrator + " " + c.args + " --seed 7 -P maxDepth=4";
+        const std::string ref = farm->embeddedRender(scene, spec, std::string("ref-") + c.integrator);
+        const std::string out = farm->dir() + "/" + c.integrator + ".exr";
+        const auto [code, output] = farm->cli("submit " + scene + " " + spec + " --wait -o " + out);
+        ASSERT_EQ(code, 0) << output << farm->master().log();
+        EXPECT_TRUE(sameBits(ref, out));
+        EXPECT_EQ(readEXR(out).metadata.at("pathfarm.integrator"), c.integrator);
+
+        const v1::Job job = farm->waitForJob(jobIdFrom(output), 10s);
+        ASSERT_EQ(job.state(), v1::JOB_DONE);
+        const v1::ChainStats &chain = job.chain();
+        EXPECT_EQ(chain.phase(), v1::CHAIN_PHASE_CHAINS);
+        EXPECT_EQ(chain.seeding_tasks(), 2u);
+        EXPECT_EQ(chain.direct_tasks(), 1u);
+        EXPECT_GT(chain.luminance(), 0);
+        EXPECT_GT(chain.candidates(), 0u);
+        EXPECT_GT(chain.mutations(), 0u);
+        ASSERT_GT(chain.mutation_counts_size(), 0);
+        uint64_t proposed = 0, accepted = 0;
+        for (const v1::MutationCount &m : chain.mutation_counts()) {
+            proposed += m.proposed();
+            accepted += m.accepted();
+            EXPECT_GE(m.acceptance(), 0);
+            EXPECT_LE(m.acceptance(), 1);
+        }
+        EXPECT_GT(proposed, 0u);
+        EXPECT_GT(accepted, 0u);
+        EXPECT_GT(job.tasks().total(), 3);
+        expectMergedOnce(job.id(), job.tasks().total());
+    }
+}
+
+TEST_F(FarmChains, KilledWorkerAndRestartedMasterInTheChainPhaseDoNotChangeTheImage) {
+    // 64 x 64 pixels, 96 mutations per pixel: 24 MLT chain tasks of 16384 mutations after the seeding.
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 64, 8);
+    const std::string spec = "--integrator mlt --spp 96 --seed 3 -P maxDepth=4 -P luminanceSamples=20000";
+    const std::string ref = farm->embeddedRender(scene, spec, "reference");
+    farm->startMaster(kFastLeases);
+    const auto [code, output] = farm->cli("submit " + scene + " " + spec);
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    const std::string job = std::to_string(id);
+
+    // A worker alone with the job is killed inside a chain task.
+    Process &victim = farm->startWorker(1);
+    ASSERT_TRUE(waitUntil([&] { return victim.log().find("rendering chain task") != std::string::npos; }, 120s))
+        << victim.log() << farm->master().log();
+    victim.signal(SIGKILL);
+    victim.wait(10s);
+
+    // Another worker carries on until chain results are checkpointed; then the master is killed.
+    farm->startWorker(2);
+    ASSERT_TRUE(waitUntil(
+        [&] {
+            return farm->queryStore(
+                       "SELECT COUNT(*) FROM merges m JOIN tasks t ON t.job_id = m.job_id AND "
+                       "t.idx = m.task_idx WHERE t.kind = 'chain' AND m.job_id = " +
+                       job) >= 2;
+        },
+        120s))
+        << farm->master().log();
+    farm->killMaster();
+    farm->startMaster(kFastLeases);
+
+    const v1::Job done = farm->waitForJob(id, 240s);
+    ASSERT_EQ(done.state(), v1::JOB_DONE) << done.DebugString() << farm->master().log();
+    EXPECT_GE(done.tasks().expired_attempts(), 1);
+    EXPECT_EQ(done.chain().phase(), v1::CHAIN_PHASE_CHAINS);
+    const auto [fcode, fetched] = farm->cli("fetch " + job + " -o " + farm->dir() + "/farm.exr");
+    ASSERT_EQ(fcode, 0) << fetched;
+    EXPECT_TRUE(sameBits(ref, farm->dir() + "/farm.exr"));
+    // Seeding (1 task), direct component (2 tasks of 8 spp), 24 chain tasks.
+    EXPECT_EQ(done.tasks().total(), 27);
+    expectMergedOnce(id, 27);
+}
+
+TEST_F(FarmChains, TimeBudgetIssuesWholeChainTasks) {
+    // 64 x 64 pixels: a chain task is 16384 mutations, 4 per pixel, whatever the budget, so a timed job of
+    // n chain tasks has the bits of an spp job of 4n mutations per pixel.
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 64, 8);
+    farm->startMaster();
+    farm->startWorker(2);
+    const std::string args = "--integrator mlt --seed 5 -P maxDepth=4 -P luminanceSamples=20000 -P directSamples=4";
+    const std::string out = farm->dir() + "/timed.exr";
+    const auto [code, output] = farm->cli("submit " + scene + " " + args + " --time 2 --wait -o " + out);
+    ASSERT_EQ(code, 0) << output << farm->master().log();
+    const Bitmap img = readEXR(out);
+    const int mpp = std::stoi(img.metadata.at("pathfarm.spp"));
+    EXPECT_GE(mpp, 4);
+    EXPECT_EQ(mpp % 4, 0);
+    const double seconds = std::stod(img.metadata.at("pathfarm.renderSeconds"));
+    EXPECT_GT(seconds, 1.0);
+    const v1::Job job = farm->waitForJob(jobIdFrom(output), 10s);
+    EXPECT_EQ(job.tasks().total(), 2 + mpp / 4);  // seeding, direct component, chains
+    expectMergedOnce(job.id(), job.tasks().total());
+    EXPECT_TRUE(sameBits(farm->embeddedRender(scene, args + " --spp " + std::to_string(mpp), "reference"), out));
+}
+
+TEST_F(FarmChains, BadChainBudgetsAreRefusedAtSubmission) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 16, 8);
+    farm->startMaster();
+    // ERPT's seeds per pixel are the scene's sampleCount; another --spp is an error for the submitter.
+    const auto [code, output] = farm->cli("submit " + scene + " --integrator erpt --spp 3");
+    EXPECT_NE(code, 0) << output;
+    EXPECT_NE(output.find("sampleCount"), std::string::npos) << output;
+    EXPECT_TRUE(farm->master().running());
+}
+
+}  // namespace
+}  // namespace pf::test::farm
