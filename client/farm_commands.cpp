@@ -13,6 +13,7 @@
 #include "farm/convert.h"
 #include "farm/job_setup.h"
 #include "farm/rpc.h"
+#include "farm_client.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "pathfarm/v1/client.grpc.pb.h"
 
@@ -22,17 +23,6 @@ namespace fs = std::filesystem;
 namespace v1 = pathfarm::v1;
 
 namespace {
-
-// A failed call: its status becomes the message and the exit code.
-struct CallError : std::runtime_error {
-    CallError(const std::string &what, const grpc::Status &s)
-        : std::runtime_error(what + ": " + s.error_message()), code(s.error_code()) {}
-    grpc::StatusCode code;
-};
-
-void check(const grpc::Status &s, const std::string &what) {
-    if (!s.ok()) throw CallError(what, s);
-}
 
 std::string progressLine(const v1::Job &j) {
     char line[256];
@@ -47,9 +37,7 @@ std::string progressLine(const v1::Job &j) {
 
 }  // namespace
 
-struct FarmCommands::Args {
-    std::string master, tokenFile;
-    farm::TlsFiles tls;
+struct FarmCommands::Args : FarmConnection {
     // submit
     std::string scene, integrator, output, label;
     int64_t spp = 0;
@@ -63,20 +51,6 @@ struct FarmCommands::Args {
     bool all = false;
 
     CLI::App *submit, *status, *watch, *fetch, *cancel, *workers, *health;
-
-    std::string token() const {
-        if (!tokenFile.empty()) return farm::readToken(tokenFile);
-        if (const char *t = std::getenv("PATHFARM_TOKEN"); t && *t) return t;
-        throw std::runtime_error("no client token: give --token-file or set PATHFARM_TOKEN");
-    }
-    std::unique_ptr<grpc::ClientContext> context(int timeoutSeconds = 60) const {
-        auto ctx = std::make_unique<grpc::ClientContext>();
-        farm::setBearer(*ctx, token());
-        if (timeoutSeconds > 0)
-            ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(timeoutSeconds));
-        return ctx;
-    }
-    std::shared_ptr<grpc::Channel> channel() const { return farm::makeChannel(master, tls, 64 << 20); }
 };
 
 FarmCommands::FarmCommands(CLI::App &app) : a_(std::make_unique<Args>()) {
@@ -135,26 +109,11 @@ v1::Job follow(v1::ClientService::Stub &stub, int64_t id, std::unique_ptr<grpc::
     return job;
 }
 
-void fetchImage(v1::ClientService::Stub &stub, int64_t id, const std::string &output,
-                std::unique_ptr<grpc::ClientContext> ctx) {
-    v1::FetchImageRequest req;
-    req.set_id(id);
-    auto reader = stub.FetchImage(ctx.get(), req);
-    v1::ImageChunk chunk;
-    v1::ImageInfo info;
-    std::string bytes;
-    while (reader->Read(&chunk)) {
-        if (chunk.has_info()) info = chunk.info();
-        bytes += chunk.data();
-    }
-    check(reader->Finish(), "fetching the image of job " + std::to_string(id));
-    if (bytes.size() != info.size())
-        throw std::runtime_error("the image of job " + std::to_string(id) + " arrived short");
-    const fs::path out(output);
-    if (out.has_parent_path()) fs::create_directories(out.parent_path());
-    std::ofstream(out, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    std::printf("job %" PRId64 ": %s image, %" PRId64 " spp -> %s\n", id, info.final() ? "final" : "running",
-                info.samples_per_pixel(), output.c_str());
+void fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id, const std::string &output) {
+    const FetchedImage image = client::fetchImage(stub, farm, id);
+    writeBytes(output, image.exr);
+    std::printf("job %" PRId64 ": %s image, %" PRId64 " spp -> %s\n", id, image.info.final() ? "final" : "running",
+                image.info.samples_per_pixel(), output.c_str());
 }
 
 }  // namespace
@@ -185,42 +144,14 @@ int FarmCommands::run() {
 
         if (*a.submit) {
             const NameValues defines = parseNameValues(a.defines, "-D"), params = parseNameValues(a.params, "-P");
-            if (!fs::is_regular_file(a.scene)) throw SceneError(a.scene + ": no such scene file");
-            const fs::path scene = fs::absolute(a.scene);
-            const v1::BundleManifest manifest =
-                farm::makeManifest(scene.parent_path().string(), scene.filename().string(),
-                                   farm::collectSceneFiles(scene.string(), defines));
-            const std::string hash = farm::bundleHash(manifest);
-            v1::StatBundleRequest statReq;
-            statReq.set_hash(hash);
-            v1::StatBundleReply stat;
-            check(stub->StatBundle(ctx().get(), statReq, &stat), "contacting " + a.master);
-            if (!stat.present()) {
-                v1::UploadBundleReply reply;
-                const auto c = ctx(3600);
-                auto writer = stub->UploadBundle(c.get(), &reply);
-                farm::streamBundle(scene.parent_path().string(), manifest, 1 << 20,
-                                   [&](const v1::BundleChunk &chunk) { return writer->Write(chunk); });
-                writer->WritesDone();
-                check(writer->Finish(), "uploading " + a.scene);
-                if (reply.hash() != hash) throw std::runtime_error("the master stored the bundle as " + reply.hash());
-                std::fprintf(stderr, "uploaded %d files (%" PRIu64 " bytes) as bundle %s\n", manifest.entries_size(),
-                             reply.bytes(), hash.c_str());
-            }
+            const SceneBundle bundle = makeSceneBundle(a.scene, defines);
+            uploadBundle(*stub, a, bundle);
             v1::SubmitJobRequest req;
             v1::JobSpec &spec = *req.mutable_spec();
-            spec.set_bundle_hash(hash);
+            spec.set_bundle_hash(bundle.hash);
             spec.set_integrator(a.integrator);
-            for (const auto &[n, v] : params) {
-                auto *p = spec.add_params();
-                p->set_name(n);
-                p->set_value(v);
-            }
-            for (const auto &[n, v] : defines) {
-                auto *p = spec.add_defines();
-                p->set_name(n);
-                p->set_value(v);
-            }
+            setParams(*spec.mutable_params(), params);
+            setParams(*spec.mutable_defines(), defines);
             if (a.time > 0) {
                 spec.mutable_budget()->set_time_seconds(a.time);
             } else if (a.spp > 0) {
@@ -228,7 +159,7 @@ int FarmCommands::run() {
             }
             spec.set_seed(a.seed);
             spec.set_priority(a.priority);
-            spec.set_label(a.label.empty() ? scene.filename().string() : a.label);
+            spec.set_label(a.label.empty() ? bundle.sceneFile : a.label);
             v1::Job job;
             check(stub->SubmitJob(ctx().get(), req, &job), "submitting " + a.scene);
             std::printf("job %" PRId64 " submitted: %s, %dx%d, %s\n", job.id(), job.scene_file().c_str(), job.width(),
@@ -242,7 +173,7 @@ int FarmCommands::run() {
                              last.error().c_str());
                 return 1;
             }
-            fetchImage(*stub, job.id(), a.output.empty() ? defaultOutput(a.scene) : a.output, ctx(600));
+            fetchImage(*stub, a, job.id(), a.output.empty() ? defaultOutput(a.scene) : a.output);
             return 0;
         }
         if (*a.status) {
@@ -275,7 +206,7 @@ int FarmCommands::run() {
             return last.state() == v1::JOB_DONE ? 0 : 1;
         }
         if (*a.fetch) {
-            fetchImage(*stub, a.job, a.output, ctx(600));
+            fetchImage(*stub, a, a.job, a.output);
             return 0;
         }
         if (*a.cancel) {

@@ -1,5 +1,7 @@
 // The `pathfarm` command line. `pathfarm render SCENE` renders on this machine (the embedded default);
-// the farm commands (submit, status, watch, fetch, cancel, workers, health) talk to a farm master.
+// the farm commands (submit, status, watch, fetch, cancel, workers, health) talk to a farm master;
+// `pathfarm diff` measures an image against a reference and `pathfarm compare` runs equal-time
+// comparisons of integrators on a farm.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -8,7 +10,9 @@
 #include <iostream>
 #include <thread>
 
+#include "compare.h"
 #include "core/error.h"
+#include "diff.h"
 #include "farm/job_setup.h"
 #include "farm_commands.h"
 #include "image/bitmap.h"
@@ -95,6 +99,8 @@ int main(int argc, char **argv) {
     render->add_option("-P,--param", r.params, "Integrator parameter: -P name=value (e.g. -P maxDepth=8)");
     render->add_flag("-q,--quiet", r.quiet, "No progress bar");
     pf::client::FarmCommands farm(app);
+    pf::client::DiffCommand diff(app);
+    pf::client::CompareCommand compare(app);
 
     try {
         app.parse(argc, argv);
@@ -105,6 +111,8 @@ int main(int argc, char **argv) {
     try {
         if (*render) return runRender(r);
         if (const int code = farm.run(); code >= 0) return code;
+        if (const int code = diff.run(); code >= 0) return code;
+        if (const int code = compare.run(); code >= 0) return code;
     } catch (const pf::SceneError &e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return pf::kExitBadInput;
