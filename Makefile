@@ -6,7 +6,7 @@ BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build demo test test-long test-sanitize bench format clean
+.PHONY: all deps build demo test test-long test-sanitize container-test bench format clean
 
 all: build
 
@@ -35,6 +35,12 @@ test-sanitize: deps
 	ninja -C build-sanitize -j$(JOBS) pathfarm $(SANITIZE_TESTS)
 	cd build-sanitize && for t in $(SANITIZE_TESTS); do \
 	  PATHFARM_CLI=$$PWD/pathfarm ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 ./$$t || exit 1; done
+
+# The farm in containers (issue 8): builds the image from deploy/Dockerfile with podman, runs a master and
+# two workers on a podman network and a `pathfarm compare` across them (scripts/container-test.sh). Not
+# part of `make test`: it compiles the project inside the image build (see deploy/README.md for its duration).
+container-test:
+	./scripts/container-test.sh
 
 bench: build
 	./$(BUILD)/bench_pathtracer scenes/cornell-box/scene.xml scenes/veach-bidir/scene.xml

@@ -21,6 +21,8 @@ BUILD_PACKAGES=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc   # farm RPC
   openssl                # certificates for the farm's TLS test
   libgtest-dev libgmock-dev libbenchmark-dev           # tests and benchmarks
+  chromium fonts-dejavu-core   # the dashboard test loads the page in headless Chromium (with a font for its text)
+  iproute2                     # the multi-host test and deploy/netns build hosts from network namespaces
 )
 
 missing=()
