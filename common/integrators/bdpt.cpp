@@ -4,6 +4,8 @@
 // strategies' densities and weights live in path/.
 #include "integrators/bdpt.h"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <filesystem>
 
 #include "image/bitmap.h"
@@ -141,8 +143,7 @@ Bitmap BDPT::render(const Scene &scene, const RenderOptions &opt, RenderStats &s
     same.spp = stats.samplesPerPixel;
     std::filesystem::create_directories(strategyImages_);
     for (const StrategyImage &si : renderStrategyImages(scene, same)) {
-        const std::string name =
-            "s" + std::to_string(si.strategy.first) + "_t" + std::to_string(si.strategy.second) + ".exr";
+        const std::string name = fmt::format("s{}_t{}.exr", si.strategy.first, si.strategy.second);
         writeEXR((std::filesystem::path(strategyImages_) / name).string(), si.image);
     }
     return image;
