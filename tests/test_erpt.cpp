@@ -139,10 +139,10 @@ TEST(ERPTParameters, MitsubaNamesAndChecks) {
     fails({{"lensPerturbation", "false"}, {"causticPerturbation", "false"}, {"multiChainPerturbation", "false"}},
           "at least one mutation");
     fails({{"chainLenght", "10"}}, "chainLenght");
-    // The seeds per pixel are the scene's sampleCount (4 here).
+    // The seeds per pixel are --spp, by default the scene's sampleCount (4 here).
     const auto erpt = makeTestIntegrator(*scene, "erpt", {});
     EXPECT_EQ(dynamic_cast<const ERPT &>(*erpt).seeding(*scene).samplesPerPixel, 4);
-    EXPECT_THROW(dynamic_cast<const ERPT &>(*erpt).chainTaskCount(*scene, 16), SceneError);
+    EXPECT_EQ(dynamic_cast<const ERPT &>(*erpt).seeding(*scene, 16).samplesPerPixel, 16);
 }
 
 }  // namespace

@@ -147,10 +147,10 @@ TEST_F(FarmChains, TimeBudgetIssuesWholeChainTasks) {
 TEST_F(FarmChains, BadChainBudgetsAreRefusedAtSubmission) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 16, 8);
     farm->startMaster();
-    // ERPT's seeds per pixel are the scene's sampleCount; another --spp is an error for the submitter.
-    const auto [code, output] = farm->cli("submit " + scene + " --integrator erpt --spp 3");
+    // A chain parameter out of range is an error for the submitter, naming the parameter.
+    const auto [code, output] = farm->cli("submit " + scene + " --integrator erpt --spp 3 -P chainLength=0");
     EXPECT_NE(code, 0) << output;
-    EXPECT_NE(output.find("sampleCount"), std::string::npos) << output;
+    EXPECT_NE(output.find("chainLength"), std::string::npos) << output;
     EXPECT_TRUE(farm->master().running());
 }
 

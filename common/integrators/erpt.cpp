@@ -43,20 +43,16 @@ ERPT::ERPT(const Properties &props, bool manifoldExploration)
     if (chainLength_ < 1) props.fail("chainLength", "must be at least 1");
 }
 
-SeedingConfig ERPT::seeding(const Scene &scene) const { return seedingWith(scene.sensor().sampleCount()); }
+SeedingConfig ERPT::seeding(const Scene &scene, int64_t spp) const {
+    return seedingWith(spp > 0 ? spp : scene.sensor().sampleCount());
+}
 
 double ERPT::expectedChains(double candidateWeight, double meanLuminance) const {
     const double nu = numChains_ * candidateWeight / meanLuminance;
     return maxChains_ > 0 ? std::min(nu, static_cast<double>(maxChains_)) : nu;
 }
 
-uint64_t ERPT::chainTaskCount(const Scene &scene, int64_t spp) const {
-    if (spp != scene.sensor().sampleCount())
-        throw SceneError(
-            "erpt: --spp (seeds per pixel) must equal the scene's sampleCount, which the seeding uses "
-            "until the chain seam passes --spp to it; set <sampler>'s sampleCount instead");
-    return blockCount(scene);
-}
+uint64_t ERPT::chainTaskCount(const Scene &scene, int64_t) const { return blockCount(scene); }
 
 ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t,
                           uint64_t index) const {

@@ -18,8 +18,8 @@
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
 // (false), manifoldPerturbation (false), lambda (50),
 // luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
-// see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel, taken from the scene's
-// sampleCount (see seeding()).
+// see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel (default: the scene's
+// sampleCount; see seeding()).
 //
 // `mept` (manifold exploration path tracing, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the
 // manifold perturbation, which subsumes the lens, caustic and multi-chain perturbations, on by default in
@@ -35,11 +35,11 @@ public:
     explicit ERPT(const Properties &props, bool manifoldExploration = false);
     std::string name() const override { return manifoldExploration_ ? "mept" : "erpt"; }
     ChainKind chainKind() const override { return ChainKind::Burst; }
-    // The pool: the scene's sampleCount BDPT samples per pixel (Mitsuba: "the size of this pool is given
-    // by the samplesPerPixel parameter of the sample generator").
-    SeedingConfig seeding(const Scene &scene) const override;
-    // A task is a block of pixels, each with its bursts. The budget is the seeding's: `spp` must be the
-    // scene's sampleCount, and under a time budget (spp = 0) the tasks after the last block are empty.
+    // The pool: `spp` BDPT samples per pixel (--spp), or the scene's sampleCount when spp is 0 (Mitsuba:
+    // "the size of this pool is given by the samplesPerPixel parameter of the sample generator").
+    SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
+    // A task is a block of pixels, each with its bursts. The budget is the seeding's (seeding() above), and
+    // under a time budget (spp = 0) the tasks after the last block are empty.
     uint64_t chainTaskCount(const Scene &scene, int64_t spp) const override;
     ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                         uint64_t index) const override;

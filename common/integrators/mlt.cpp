@@ -118,7 +118,7 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
         props.fail("twoStage", "two-stage MLT is not implemented (leave twoStage false)");
 }
 
-SeedingConfig MLT::seeding(const Scene &scene) const {
+SeedingConfig MLT::seeding(const Scene &scene, int64_t) const {
     const Film &film = scene.sensor().film();
     const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
     return seedingWith(std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels));

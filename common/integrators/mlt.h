@@ -74,7 +74,7 @@ public:
     // manifoldExploration: MEMLT's default mutations and name.
     explicit MLT(const Properties &props, bool manifoldExploration = false);
     std::string name() const override { return manifoldExploration_ ? "memlt" : "mlt"; }
-    SeedingConfig seeding(const Scene &scene) const override;
+    SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
 
 private:
     int64_t luminanceSamples_ = 100000;

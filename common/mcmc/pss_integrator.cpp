@@ -47,7 +47,7 @@ PrimarySampleIntegrator::PrimarySampleIntegrator(const Properties &props) {
         direct_ = makeBDPT(loc, maxDepth < 0 ? 2 : std::min<int64_t>(2, maxDepth), rrDepth, sampleDirect);
 }
 
-SeedingConfig PrimarySampleIntegrator::seeding(const Scene &scene) const {
+SeedingConfig PrimarySampleIntegrator::seeding(const Scene &scene, int64_t) const {
     const Film &film = scene.sensor().film();
     const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
     return {bdpt_.get(), std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels), minDepth()};
@@ -75,8 +75,7 @@ PrimarySampleIntegrator::StartedChain PrimarySampleIntegrator::startChain(const 
 
 void PrimarySampleIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task,
                                        const ChainSeed &seed, double scale, PCG32 &rng, ImageBlock &film,
-                                       MutationCounts &counts,
-                  ChainCounters &) const {
+                                       MutationCounts &counts, ChainCounters &) const {
     const StartedChain s = startChain(scene, jobSeed, task, seed, scale, rng, film);
     runMetropolis(*s.chain, task.mutations, rng, s.kelemen ? &*s.kelemen : nullptr, counts);
 }

@@ -31,11 +31,10 @@ namespace pf {
 
 class PrimarySampleIntegrator : public ChainIntegrator {
 public:
-    SeedingConfig seeding(const Scene &scene) const override;
+    SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
     MutationCounts mutationTypes() const override { return PrimarySampleChain::mutationTypes(); }
     void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed, double scale,
-                  PCG32 &rng, ImageBlock &film, MutationCounts &counts,
-                  ChainCounters &counters) const override;
+                  PCG32 &rng, ImageBlock &film, MutationCounts &counts, ChainCounters &counters) const override;
     const SamplingIntegrator *directIntegrator() const override { return direct_.get(); }
     int64_t directSamples() const override { return directSamples_; }
 

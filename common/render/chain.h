@@ -52,8 +52,9 @@ class Normalizer;
 class ChainIntegrator : public Integrator {
 public:
     virtual ChainKind chainKind() const { return ChainKind::Long; }
-    // The seeding the chains start from.
-    virtual SeedingConfig seeding(const Scene &scene) const = 0;
+    // The seeding the chains start from, for a job of `spp` (the budget of render(); 0: a time budget or
+    // the scene's sampleCount). Only ERPT-type bursts take their seeds per pixel from it.
+    virtual SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const = 0;
     // The mutation types of this algorithm's chains, with zero counts, in MutationCount index order.
     virtual MutationCounts mutationTypes() const = 0;
     // Runs one chain of task.mutations steps from `seed`, drawing from `rng`, and deposits into `film` with
@@ -61,7 +62,7 @@ public:
     // measures in `counters`.
     virtual void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
                           double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts,
-                  ChainCounters &counters) const = 0;
+                          ChainCounters &counters) const = 0;
     // The component rendered without chains (Mitsuba's directSamples), its samples per pixel; null if none.
     virtual const SamplingIntegrator *directIntegrator() const { return nullptr; }
     virtual int64_t directSamples() const { return 0; }

@@ -19,7 +19,7 @@ ChainJob::ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64
       integrator_(integrator),
       seed_(seed),
       spp_(spp),
-      config_(integrator.seeding(scene)),
+      config_(integrator.seeding(scene, spp)),
       seedingTasks_(seedingTasks(scene)),
       direct_(makeFilmBlock(scene)),
       chains_(makeFilmBlock(scene)) {
