@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.h"
 #include "image/bitmap.h"
 #include "image/film.h"
 #include "integrators/integrator.h"
@@ -49,30 +50,6 @@ pf::Bitmap render(const pf::Scene &scene, const std::string &type, const Options
     opt.seed = seed;
     opt.threads = o.threads;
     return integrator->render(scene, opt, stats);
-}
-
-// relMSE, and the same without the `trim` fraction of pixels with the largest errors.
-struct Error {
-    double all = 0, trimmed = 0;
-};
-
-Error relMSE(const pf::Bitmap &image, const pf::Bitmap &reference, double trim = 0.001) {
-    std::vector<double> pixels;
-    for (size_t i = 0; i < image.rgb.size(); i += 3) {
-        double e = 0;
-        for (size_t c = i; c < i + 3; ++c) {
-            const double r = reference.rgb[c], d = image.rgb[c] - r;
-            e += d * d / (r * r + 1e-2);
-        }
-        pixels.push_back(e / 3);
-    }
-    std::sort(pixels.begin(), pixels.end());
-    const size_t kept = pixels.size() - static_cast<size_t>(trim * static_cast<double>(pixels.size()));
-    Error err;
-    for (size_t i = 0; i < pixels.size(); ++i) (i < kept ? err.trimmed : err.all) += pixels[i];
-    err.all = (err.all + err.trimmed) / static_cast<double>(pixels.size());
-    err.trimmed /= static_cast<double>(kept);
-    return err;
 }
 
 }  // namespace
@@ -123,17 +100,17 @@ int main(int argc, char **argv) {
     const pf::Bitmap halfA = render(*scene, "bdpt", o, o.refSpp / 2, 0, 2000, halfStats);
     const pf::Bitmap halfB = render(*scene, "bdpt", o, o.refSpp / 2, 0, 3000, halfStats);
     std::printf("reference: bdpt, %d x %d, %d spp, %.1f s; its own relMSE about %.3g\n", o.refRes, o.refRes, o.refSpp,
-                refStats.seconds, relMSE(halfA, halfB).all / 4);
+                refStats.seconds, bench::relativeError(halfA, halfB).all / 4);
     if (!o.out.empty()) pf::writeEXR(o.out + "/reference.exr", reference);
 
-    Error mean[2];
+    bench::RelativeError mean[2];
     std::printf("%-6s %4s %9s %7s %12s %16s\n", "", "run", "seconds", "spp", "relMSE", "w/o worst 0.1%");
     for (int k = 0; k < 2; ++k) {
         const std::string type = k == 0 ? "bdpt" : "path";
         for (int run = 0; run < o.runs; ++run) {
             pf::RenderStats stats;
             const pf::Bitmap image = render(*scene, type, o, 0, o.seconds, static_cast<uint64_t>(run + 1), stats);
-            const Error e = relMSE(image, reference);
+            const bench::RelativeError e = bench::relativeError(image, reference);
             mean[k].all += e.all / o.runs;
             mean[k].trimmed += e.trimmed / o.runs;
             std::printf("%-6s %4d %9.2f %7lld %12.4g %16.4g\n", type.c_str(), run, stats.seconds,

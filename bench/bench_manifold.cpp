@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "bench_scene.h"
+#include "bench_support.h"
 #include "image/bitmap.h"
 #include "integrators/integrator.h"
 #include "render/chain.h"
@@ -88,25 +88,6 @@ void printTable1(const std::string &label, const pf::ChainImage &image) {
                         static_cast<unsigned long long>(c.proposed), 100.0 * c.accepted / c.proposed);
 }
 
-double relMSE(const pf::Bitmap &image, const pf::Bitmap &reference) {
-    double sum = 0;
-    for (size_t c = 0; c < image.rgb.size(); ++c) {
-        const double r = reference.rgb[c], d = image.rgb[c] - r;
-        sum += d * d / (r * r + 1e-2);
-    }
-    return sum / static_cast<double>(image.rgb.size());
-}
-
-pf::Bitmap render(const pf::Scene &scene, const pf::Integrator &method, int64_t spp, double seconds, int threads,
-                  pf::RenderStats &stats) {
-    pf::RenderOptions opt;
-    opt.spp = spp;
-    opt.timeLimit = seconds;
-    opt.seed = 7;
-    opt.threads = threads;
-    return method.render(scene, opt, stats);
-}
-
 void benchScene(const Options &o, const std::string &path) {
     std::printf("\n== %s, %d x %d, lambda %g\n", path.c_str(), o.res, o.res, o.lambda);
     std::printf("%-7s %11s %9s %10s %7s %9s %7s %6s %4s %9s %7s %11s\n", "method", "mutations", "accepted", "walks",
@@ -120,7 +101,7 @@ void benchScene(const Options &o, const std::string &path) {
 
     pf::RenderStats refStats;
     const pf::Bitmap reference =
-        render(*scene, *integrator(*scene, "bdpt", o.lambda), o.refSpp, 0, o.threads, refStats);
+        bench::renderWith(*scene, *integrator(*scene, "bdpt", o.lambda), o.refSpp, 0, 7, o.threads, refStats);
     std::printf("reference: bdpt %d spp in %.1f s\n", o.refSpp, refStats.seconds);
     const std::string stem = o.out.empty() ? "" : o.out + "/" + fs::path(path).parent_path().filename().string();
     if (!stem.empty()) pf::writeEXR(stem + "-reference.exr", reference);
@@ -133,16 +114,17 @@ void benchScene(const Options &o, const std::string &path) {
             // Seeds per pixel for S seconds from a one-seed probe (its time is mostly per seed).
             const auto probeScene = bench::loadWithSampleCount(path, 1, o.res, "bench_manifold");
             pf::RenderStats probe;
-            render(*probeScene, *integrator(*probeScene, type, o.lambda), 0, 0, o.threads, probe);
+            bench::renderWith(*probeScene, *integrator(*probeScene, type, o.lambda), 0, 0, 7, o.threads, probe);
             seeds = std::max<int64_t>(1, static_cast<int64_t>(o.seconds / std::max(probe.seconds, 1e-3)));
             burstScene = bench::loadWithSampleCount(path, static_cast<int>(seeds), o.res, "bench_manifold");
         }
         const pf::Scene &s = bursts ? *burstScene : *scene;
         pf::RenderStats stats;
         const pf::Bitmap image =
-            render(s, *integrator(s, type, o.lambda), seeds, bursts ? 0 : o.seconds, o.threads, stats);
+            bench::renderWith(s, *integrator(s, type, o.lambda), seeds, bursts ? 0 : o.seconds, 7, o.threads, stats);
         std::printf("%-7s %9.2f %9lld %12.4g\n", type.c_str(), stats.seconds,
-                    static_cast<long long>(bursts ? seeds : stats.samplesPerPixel), relMSE(image, reference));
+                    static_cast<long long>(bursts ? seeds : stats.samplesPerPixel),
+                    bench::relativeError(image, reference).all);
         if (!stem.empty()) pf::writeEXR(stem + "-" + type + ".exr", image);
     }
 }

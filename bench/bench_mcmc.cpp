@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.h"
 #include "render/image_task.h"
 #include "render/normalizer.h"
 #include "test_pssmlt_common.h"
@@ -60,42 +61,6 @@ void throughput(const pf::Scene &scene, const pf::ChainIntegrator &integrator, i
                     c.proposed ? 100.0 * static_cast<double>(c.accepted) / static_cast<double>(c.proposed) : 0.0);
 }
 
-struct Error {
-    double all = 0, trimmed = 0;
-};
-
-Error relativeError(const pf::Bitmap &image, const pf::Bitmap &reference) {
-    std::vector<double> perPixel;
-    for (size_t p = 0; p + 2 < image.rgb.size(); p += 3) {
-        double sum = 0;
-        for (size_t c = p; c < p + 3; ++c) {
-            const double r = reference.rgb[c], d = image.rgb[c] - r;
-            sum += d * d / (r * r + 1e-2);
-        }
-        perPixel.push_back(sum / 3);
-    }
-    std::sort(perPixel.begin(), perPixel.end());
-    const size_t worst = perPixel.size() / 1000;
-    Error e;
-    for (size_t i = 0; i < perPixel.size(); ++i) {
-        e.all += perPixel[i];
-        if (i + worst < perPixel.size()) e.trimmed += perPixel[i];
-    }
-    e.all /= static_cast<double>(perPixel.size());
-    e.trimmed /= static_cast<double>(perPixel.size() - worst);
-    return e;
-}
-
-pf::Bitmap render(const pf::Scene &scene, const pf::Integrator &integrator, int64_t spp, double seconds, uint64_t seed,
-                  int threads, pf::RenderStats &stats) {
-    pf::RenderOptions opt;
-    opt.spp = spp;
-    opt.timeLimit = seconds;
-    opt.seed = seed;
-    opt.threads = threads;
-    return integrator.render(scene, opt, stats);
-}
-
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -126,18 +91,19 @@ int main(int argc, char **argv) {
 
     pf::RenderStats refStats;
     const auto bdpt = pf::test::makeTestIntegrator(*scene, "bdpt", {});
-    const pf::Bitmap reference = render(*scene, *bdpt, o.refSpp, 0, 1000,
-                                        static_cast<int>(std::max(1u, std::thread::hardware_concurrency())), refStats);
+    const pf::Bitmap reference =
+        bench::renderWith(*scene, *bdpt, o.refSpp, 0, 1000,
+                          static_cast<int>(std::max(1u, std::thread::hardware_concurrency())), refStats);
     std::printf("reference: bdpt, %d spp, %.1f s\n", o.refSpp, refStats.seconds);
     std::printf("%-7s %4s %9s %9s %12s %16s\n", "", "run", "seconds", "spp/mpp", "relMSE", "w/o worst 0.1%");
     for (const std::string type : {"bdpt", "pssmlt", "mmlt"}) {
         const auto integrator = pf::test::makeTestIntegrator(*scene, type, {});
-        Error mean;
+        bench::RelativeError mean;
         for (int run = 0; run < o.runs; ++run) {
             pf::RenderStats stats;
             const pf::Bitmap image =
-                render(*scene, *integrator, 0, o.seconds, static_cast<uint64_t>(run + 1), o.threads, stats);
-            const Error e = relativeError(image, reference);
+                bench::renderWith(*scene, *integrator, 0, o.seconds, static_cast<uint64_t>(run + 1), o.threads, stats);
+            const bench::RelativeError e = bench::relativeError(image, reference);
             mean.all += e.all / o.runs;
             mean.trimmed += e.trimmed / o.runs;
             std::printf("%-7s %4d %9.2f %9lld %12.4g %16.4g\n", type.c_str(), run, stats.seconds,

@@ -28,7 +28,7 @@
 #include <thread>
 #include <vector>
 
-#include "bench_scene.h"
+#include "bench_support.h"
 #include "image/bitmap.h"
 #include "integrators/erpt.h"
 #include "integrators/mlt.h"
@@ -74,42 +74,6 @@ pf::ChainImage runChains(const pf::Scene &scene, const pf::ChainIntegrator &inte
             image, pf::runChainTask(scene, integrator, 1, integrator.chainTask(scene, normalizer, 1, spp, i)));
     chainSeconds = secondsSince(start);
     return image;
-}
-
-struct Error {
-    double all = 0, trimmed = 0;
-};
-
-Error relativeError(const pf::Bitmap &image, const pf::Bitmap &reference) {
-    std::vector<double> perPixel;
-    for (size_t p = 0; p + 2 < image.rgb.size(); p += 3) {
-        double sum = 0;
-        for (size_t c = p; c < p + 3; ++c) {
-            const double r = reference.rgb[c], d = image.rgb[c] - r;
-            sum += d * d / (r * r + 1e-2);
-        }
-        perPixel.push_back(sum / 3);
-    }
-    std::sort(perPixel.begin(), perPixel.end());
-    const size_t worst = perPixel.size() / 1000;
-    Error e;
-    for (size_t i = 0; i < perPixel.size(); ++i) {
-        e.all += perPixel[i];
-        if (i + worst < perPixel.size()) e.trimmed += perPixel[i];
-    }
-    e.all /= static_cast<double>(perPixel.size());
-    e.trimmed /= static_cast<double>(perPixel.size() - worst);
-    return e;
-}
-
-pf::Bitmap render(const pf::Scene &scene, const pf::Integrator &integrator, int64_t spp, double seconds, uint64_t seed,
-                  int threads, pf::RenderStats &stats) {
-    pf::RenderOptions opt;
-    opt.spp = spp;
-    opt.timeLimit = seconds;
-    opt.seed = seed;
-    opt.threads = threads;
-    return integrator.render(scene, opt, stats);
 }
 
 }  // namespace
@@ -160,7 +124,7 @@ int main(int argc, char **argv) {
     // 2. Equal time.
     pf::RenderStats refStats;
     const auto bdpt = makeIntegrator(*scene, "bdpt");
-    const pf::Bitmap reference = render(*scene, *bdpt, o.refSpp, 0, 1000, o.threads, refStats);
+    const pf::Bitmap reference = bench::renderWith(*scene, *bdpt, o.refSpp, 0, 1000, o.threads, refStats);
     std::printf("reference: bdpt, %d spp, %.1f s\n", o.refSpp, refStats.seconds);
     if (!o.out.empty()) pf::writeEXR(o.out + "/reference.exr", reference);
     struct Method {
@@ -179,7 +143,8 @@ int main(int argc, char **argv) {
             for (int k = 0; k < 2; ++k) {
                 const auto probeScene = bench::loadWithSampleCount(o.scene, 1 + 2 * k, o.res, "bench_mlt");
                 pf::RenderStats stats;
-                render(*probeScene, *makeIntegrator(*probeScene, m.type, m.chainLength), 0, 0, 1, o.threads, stats);
+                bench::renderWith(*probeScene, *makeIntegrator(*probeScene, m.type, m.chainLength), 0, 0, 1, o.threads,
+                                  stats);
                 probe[k] = stats.seconds;
             }
             const double perSeed = std::max(1e-9, (probe[1] - probe[0]) / 2), fixed = probe[0] - perSeed;
@@ -188,12 +153,12 @@ int main(int argc, char **argv) {
         const auto methodScene = timed ? nullptr : bench::loadWithSampleCount(o.scene, seeds, o.res, "bench_mlt");
         const pf::Scene &s = timed ? *scene : *methodScene;
         const auto integrator = makeIntegrator(s, m.type, m.chainLength);
-        Error mean;
+        bench::RelativeError mean;
         for (int run = 0; run < o.runs; ++run) {
             pf::RenderStats stats;
-            const pf::Bitmap image =
-                render(s, *integrator, seeds, timed ? o.seconds : 0, static_cast<uint64_t>(run + 1), o.threads, stats);
-            const Error e = relativeError(image, reference);
+            const pf::Bitmap image = bench::renderWith(s, *integrator, seeds, timed ? o.seconds : 0,
+                                                       static_cast<uint64_t>(run + 1), o.threads, stats);
+            const bench::RelativeError e = bench::relativeError(image, reference);
             mean.all += e.all / o.runs;
             mean.trimmed += e.trimmed / o.runs;
             std::printf("%-14s %4d %9.2f %9lld %12.4g %16.4g\n", m.label.c_str(), run, stats.seconds,

@@ -63,13 +63,17 @@ int main(int argc, char **argv) {
     std::vector<std::string> scenes;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--res" && i + 1 < argc) res = std::stoi(argv[++i]);
-        else if (a == "--spp" && i + 1 < argc) spp = std::stoi(argv[++i]);
-        else if (a == "--threads" && i + 1 < argc) threads = std::stoi(argv[++i]);
-        else scenes.push_back(a);
+        if (a == "--res" && i + 1 < argc)
+            res = std::stoi(argv[++i]);
+        else if (a == "--spp" && i + 1 < argc)
+            spp = std::stoi(argv[++i]);
+        else if (a == "--threads" && i + 1 < argc)
+            threads = std::stoi(argv[++i]);
+        else
+            scenes.push_back(a);
     }
-    std::printf("%-36s %8s %14s %14s %14s %8s\n", "scene", "threads", "embree rays/s", "path rays/s",
-                "samples/s", "ratio");
+    std::printf("%-36s %8s %14s %14s %14s %8s\n", "scene", "threads", "embree rays/s", "path rays/s", "samples/s",
+                "ratio");
     for (const std::string &path : scenes) {
         auto scene = pf::loadScene(path);
         scene->resizeFilm(res, res);

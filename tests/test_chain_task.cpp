@@ -13,6 +13,7 @@
 #include "integrators/pssmlt.h"
 #include "render/image_task.h"
 #include "render/normalizer.h"
+#include "support/chain_util.h"
 #include "support/process.h"
 #include "test_pssmlt_common.h"
 
@@ -27,24 +28,10 @@ std::string chainTaskBytes(const std::string &type) {
     auto scene = loadChainTestScene("cornell-box", 16);
     const auto integrator = makeTestIntegrator(*scene, type, {{"luminanceSamples", "1024"}});
     const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
-    std::vector<SeedingResult> seeds;
-    for (const SeedingTask &t : seedingTasks(*scene))
-        seeds.push_back(runSeedingTask(*scene, chains.seeding(*scene), kSeed, t));
-    const Normalizer normalizer(std::move(seeds));
+    const Normalizer normalizer = seedChains(*scene, chains, kSeed);
     ChainTask task = chains.chainTask(*scene, normalizer, kSeed, 1, 3);
     task.mutations = 3000;
-    const ChainResult r = runChainTask(*scene, chains, kSeed, task);
-    std::string bytes(reinterpret_cast<const char *>(r.film.splatData().data()), r.film.splatData().size_bytes());
-    bytes += std::to_string(r.mutations);
-    for (const MutationCount &c : r.counts)
-        bytes += c.name + std::to_string(c.proposed) + "/" + std::to_string(c.accepted);
-    return bytes;
-}
-
-std::string selfPath() {
-    char buf[4096];
-    const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-    return n > 0 ? std::string(buf, static_cast<size_t>(n)) : "";
+    return chainResultBytes(runChainTask(*scene, chains, kSeed, task));
 }
 
 // Run by the test below in child processes: writes the task's bytes to $PATHFARM_CHAIN_TASK_OUT.
@@ -52,13 +39,6 @@ TEST(ChainTaskChild, WriteResult) {
     const char *out = std::getenv("PATHFARM_CHAIN_TASK_OUT");
     if (!out) GTEST_SKIP() << "only run as a child of ChainTask.SameBitsInTwoProcesses";
     std::ofstream(out, std::ios::binary) << chainTaskBytes(std::getenv("PATHFARM_CHAIN_TASK_TYPE"));
-}
-
-std::string readFile(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
 }
 
 // §2.5, §9.4: a task rerun in another process (a retried farm task) returns the same bits.

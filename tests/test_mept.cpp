@@ -9,6 +9,7 @@
 
 #include "integrators/erpt.h"
 #include "render/normalizer.h"
+#include "support/chain_util.h"
 #include "test_mlt_common.h"
 
 namespace pf::test {
@@ -97,10 +98,7 @@ TEST(ManifoldExploration, WalkStatistics) {
     auto scene = loadMLTTestScene("ring-caustic", 16, 8);
     const auto integrator = makeTestIntegrator(*scene, "mept", {{"directSamples", "-1"}, {"chainLength", "50"}});
     const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
-    std::vector<SeedingResult> seeds;
-    for (const SeedingTask &t : seedingTasks(*scene))
-        seeds.push_back(runSeedingTask(*scene, chains.seeding(*scene), 3, t));
-    const Normalizer normalizer(std::move(seeds));
+    const Normalizer normalizer = seedChains(*scene, chains, 3);
     ChainCounters counters;
     MutationCounts counts;
     for (uint64_t k = 0; k < chains.chainTaskCount(*scene, 8); ++k) {

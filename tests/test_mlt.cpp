@@ -13,6 +13,7 @@
 
 #include "integrators/mlt.h"
 #include "render/normalizer.h"
+#include "support/chain_util.h"
 #include "support/process.h"
 #include "test_mlt_common.h"
 
@@ -58,18 +59,10 @@ std::string chainTaskBytes(const std::string &type) {
     auto scene = loadMLTTestScene("veach-bidir", 16, 4);
     const auto integrator = makeTestIntegrator(*scene, type, {{"luminanceSamples", "1024"}, {"directSamples", "-1"}});
     const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
-    std::vector<SeedingResult> seeds;
-    for (const SeedingTask &t : seedingTasks(*scene))
-        seeds.push_back(runSeedingTask(*scene, chains.seeding(*scene), kSeed, t));
-    const Normalizer normalizer(std::move(seeds));
+    const Normalizer normalizer = seedChains(*scene, chains, kSeed);
     ChainTask task = chains.chainTask(*scene, normalizer, kSeed, 4, 1);
     if (type == "mlt") task.mutations = 5000;
-    const ChainResult r = runChainTask(*scene, chains, kSeed, task);
-    std::string bytes(reinterpret_cast<const char *>(r.film.splatData().data()), r.film.splatData().size_bytes());
-    bytes += std::to_string(r.mutations);
-    for (const MutationCount &c : r.counts)
-        bytes += c.name + std::to_string(c.proposed) + "/" + std::to_string(c.accepted);
-    return bytes;
+    return chainResultBytes(runChainTask(*scene, chains, kSeed, task));
 }
 
 // Run by the test below in child processes: writes the task's bytes to $PATHFARM_MLT_TASK_OUT.
@@ -79,26 +72,17 @@ TEST(MLTChainTaskChild, WriteResult) {
     std::ofstream(out, std::ios::binary) << chainTaskBytes(std::getenv("PATHFARM_MLT_TASK_TYPE"));
 }
 
-std::string readFile(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
 // A retried farm task returns the same bits, in this process and in two others.
 TEST(MLTChainTask, SameBitsInTwoProcesses) {
     const std::string dir = tempDir("mlt-chain-task-processes");
-    char self[4096];
-    const ssize_t length = readlink("/proc/self/exe", self, sizeof self - 1);
-    ASSERT_GT(length, 0);
+    const std::string self = selfPath();
+    ASSERT_FALSE(self.empty());
     for (const std::string type : {"mlt", "erpt"}) {
         std::vector<std::string> results;
         for (int k = 0; k < 2; ++k) {
             const std::string out = dir + "/" + type + std::to_string(k) + ".bin";
             const ProcessResult p = runCommand("PATHFARM_MLT_TASK_OUT=" + out + " PATHFARM_MLT_TASK_TYPE=" + type +
-                                               " " + std::string(self, static_cast<size_t>(length)) +
-                                               " --gtest_filter=MLTChainTaskChild.WriteResult");
+                                               " " + self + " --gtest_filter=MLTChainTaskChild.WriteResult");
             ASSERT_EQ(p.exitCode, 0) << p.output;
             results.push_back(readFile(out));
         }

@@ -13,6 +13,7 @@
 #include "integrators/mlt.h"
 #include "render/normalizer.h"
 #include "scene/scene.h"
+#include "support/chain_util.h"
 #include "support/render_util.h"
 #include "test_pssmlt_common.h"
 
@@ -83,10 +84,7 @@ inline std::vector<std::pair<std::string, std::string>> singleMutation(MutationT
 // The per-type counts of one render's chain tasks.
 inline MutationCounts mutationCounts(const Scene &scene, const Integrator &integrator) {
     const auto &chains = dynamic_cast<const ChainIntegrator &>(integrator);
-    std::vector<SeedingResult> seeds;
-    for (const SeedingTask &t : seedingTasks(scene))
-        seeds.push_back(runSeedingTask(scene, chains.seeding(scene), 3, t));
-    const Normalizer normalizer(std::move(seeds));
+    const Normalizer normalizer = seedChains(scene, chains, 3);
     MutationCounts counts;
     const int64_t spp = scene.sensor().sampleCount();
     for (uint64_t k = 0; k < chains.chainTaskCount(scene, spp); ++k)

@@ -1,5 +1,6 @@
-// What the Markov-chain benchmarks share: loading a shared scene with another sampleCount (the seeds per
-// pixel of ERPT-type bursts, which take their budget from the scene) at a square benchmark resolution.
+// What the integrator benchmarks share: loading a shared scene with another sampleCount (the seeds per
+// pixel of ERPT-type bursts, which take their budget from the scene) at a square benchmark resolution, one
+// render with a budget, and the equal-time error against a reference (common/image/metrics.h).
 #pragma once
 #include <unistd.h>
 
@@ -10,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include "image/metrics.h"
+#include "integrators/integrator.h"
 #include "scene/scene.h"
 
 namespace bench {
@@ -35,6 +38,28 @@ inline std::unique_ptr<pf::Scene> loadWithSampleCount(const std::string &path, i
     auto scene = pf::loadScene((dir / "scene.xml").string());
     scene->resizeFilm(res, res);
     return scene;
+}
+
+// relMSE against `reference` (epsilon 1e-2 in the denominator), over all pixels and without the 0.1% of
+// pixels with the largest errors (one bright outlier can hold most of it).
+struct RelativeError {
+    double all = 0, trimmed = 0;
+};
+inline RelativeError relativeError(const pf::Bitmap &image, const pf::Bitmap &reference) {
+    pf::MetricOptions trim;
+    trim.trimFraction = 0.001;
+    return {pf::computeMetrics(image, reference).relMse, pf::computeMetrics(image, reference, trim).relMse};
+}
+
+// One render of `integrator` with spp samples (or mutations) per pixel, or a time budget of `seconds`.
+inline pf::Bitmap renderWith(const pf::Scene &scene, const pf::Integrator &integrator, int64_t spp, double seconds,
+                             uint64_t seed, int threads, pf::RenderStats &stats) {
+    pf::RenderOptions opt;
+    opt.spp = spp;
+    opt.timeLimit = seconds;
+    opt.seed = seed;
+    opt.threads = threads;
+    return integrator.render(scene, opt, stats);
 }
 
 }  // namespace bench

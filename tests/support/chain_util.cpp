@@ -1,0 +1,42 @@
+#include "support/chain_util.h"
+
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "render/seeding.h"
+
+namespace pf::test {
+
+Normalizer seedChains(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed) {
+    std::vector<SeedingResult> seeds;
+    for (const SeedingTask &t : seedingTasks(scene))
+        seeds.push_back(runSeedingTask(scene, integrator.seeding(scene), seed, t));
+    return Normalizer(std::move(seeds));
+}
+
+std::string chainResultBytes(const ChainResult &result) {
+    std::string bytes(reinterpret_cast<const char *>(result.film.splatData().data()),
+                      result.film.splatData().size_bytes());
+    bytes += std::to_string(result.mutations);
+    for (const MutationCount &c : result.counts)
+        bytes += c.name + std::to_string(c.proposed) + "/" + std::to_string(c.accepted);
+    return bytes;
+}
+
+std::string selfPath() {
+    char buf[4096];
+    const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
+    return n > 0 ? std::string(buf, static_cast<size_t>(n)) : "";
+}
+
+std::string readFile(const std::string &path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace pf::test
