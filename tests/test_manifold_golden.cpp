@@ -81,9 +81,10 @@ void expectMat2Near(const Mat2 &a, const Mat2 &b, double tol, const char *what) 
         for (int c = 0; c < 2; ++c) EXPECT_NEAR(a(r, c), b(r, c), tol) << what << " (" << r << "," << c << ")";
 }
 
-// Central differences of c_i with respect to the chart of vertex `which` (0 = prev, 1 = self, 2 = next).
-Mat2 finiteDifference(const ManifoldVertex &prev, const ManifoldVertex &v, const ManifoldVertex &next, int which) {
-    constexpr double h = 1e-5;
+// Central differences of c_i with respect to the chart of vertex `which` (0 = prev, 1 = self, 2 = next), with
+// step h.
+Mat2 centralDifference(const ManifoldVertex &prev, const ManifoldVertex &v, const ManifoldVertex &next, int which,
+                       double h) {
     Mat2 fd;
     for (int col = 0; col < 2; ++col) {
         Vec2 values[2];
@@ -98,6 +99,14 @@ Mat2 finiteDifference(const ManifoldVertex &prev, const ManifoldVertex &v, const
         fd(1, col) = (values[0].y - values[1].y) / (2 * h);
     }
     return fd;
+}
+
+// Richardson's extrapolation of two central differences (error O(h^4) instead of O(h^2)), so that the
+// comparison tolerance stays far below any error of a derivative term.
+Mat2 finiteDifference(const ManifoldVertex &prev, const ManifoldVertex &v, const ManifoldVertex &next, int which) {
+    constexpr double h = 1e-4;
+    return (centralDifference(prev, v, next, which, h / 2) * 4.0 - centralDifference(prev, v, next, which, h)) *
+           (1.0 / 3.0);
 }
 
 double maxAbs(const Mat2 &m) {
@@ -139,13 +148,16 @@ TEST(ManifoldGolden, WorkedExampleOfTheTechnicalReport) {
 }
 
 // Every block of every row against central differences, for reflection and for refraction with eta = 1.5 and
-// 1/1.5, on configurations with tilted shading normals and curved surfaces.
+// 1/1.5, on configurations with tilted shading normals and curved surfaces, in the chart's frame of ideal
+// specular vertices and in the continuous frame of glossy ones (specular_constraint.h), whose turning with the
+// normal the diagonal block must include.
 TEST(ManifoldGolden, ConstraintRowsMatchFiniteDifferences) {
     PCG32 rng(11, 3);
     int checked = 0;
-    for (int trial = 0; trial < 300; ++trial) {
-        const auto [scattering, eta] = opticsOfTrial(trial);
-        const ManifoldVertex v = randomSpecular(rng, scattering, eta);
+    for (int trial = 0; trial < 600; ++trial) {
+        const auto [scattering, eta] = opticsOfTrial(trial / 2);
+        ManifoldVertex v = randomSpecular(rng, scattering, eta);
+        v.glossy = trial % 2 == 1;
         // Neighbours at distance 1-3 with random orthonormal charts; the previous one possibly a surface vertex
         // with a constrained row of its own (only its chart matters here).
         const ManifoldVertex prev = planeVertex(v.p + randomDirection(rng) * uniform(rng, 1, 3), randomDirection(rng));
@@ -162,7 +174,37 @@ TEST(ManifoldGolden, ConstraintRowsMatchFiniteDifferences) {
         }
         ++checked;
     }
-    EXPECT_GT(checked, 250);
+    EXPECT_GT(checked, 500);
+}
+
+// The glossy frame is a function of the shading normal alone: two charts of the same tangent plane (two
+// triangles of a mesh meeting at an edge, or a turned parameterization) give the same offset, while the chart's
+// frame of ideal vertices turns with the chart.
+TEST(ManifoldGolden, GlossyFrameDependsOnTheNormalAlone) {
+    PCG32 rng(31, 4);
+    for (int trial = 0; trial < 100; ++trial) {
+        ManifoldVertex v = randomSpecular(rng, Scattering::Reflection, 1.0);
+        const ManifoldVertex prev = ManifoldVertex::fixedPosition(v.p + randomDirection(rng) * 2.0);
+        const ManifoldVertex next = ManifoldVertex::fixedPosition(v.p + randomDirection(rng) * 1.5);
+        ManifoldVertex turned = v;
+        const double angle = uniform(rng, 0.1, 3.0);
+        turned.dpdu = v.dpdu * std::cos(angle) + v.dpdv * std::sin(angle);
+        turned.dpdv = v.dpdv * std::cos(angle) - v.dpdu * std::sin(angle);
+        const std::optional<Vec2> chart = constraintValue(prev, v, next),
+                                  chartTurned = constraintValue(prev, turned, next);
+        ASSERT_TRUE(chart && chartTurned);
+        const Vec2 change = *chart - *chartTurned;
+        EXPECT_GT(std::hypot(change.x, change.y), 1e-6 * std::hypot(chart->x, chart->y));
+        v.glossy = turned.glossy = true;
+        const std::optional<Vec2> glossy = constraintValue(prev, v, next),
+                                  glossyTurned = constraintValue(prev, turned, next);
+        ASSERT_TRUE(glossy && glossyTurned);
+        EXPECT_NEAR(glossy->x, glossyTurned->x, 1e-15);
+        EXPECT_NEAR(glossy->y, glossyTurned->y, 1e-15);
+        // It spans the shading tangent plane with an orthonormal frame: |o| is the sine of the angle between h and n.
+        const Vec3 h = *generalizedHalfVector(prev, v, next);
+        EXPECT_NEAR(std::hypot(glossy->x, glossy->y), cross(h, v.n).length(), 1e-12);
+    }
 }
 
 // The fixed-direction endpoint row c_1 = T(x_1)^T γ(x_2 - x_1) of §6.1 (directional light, orthographic camera).

@@ -2,9 +2,11 @@
 // (tests/scenes/manifold/): reflection off a plane (the mirror-image solution) and off a sphere, refraction through
 // a plane (Snell's law solved by bisection) and through a glass sphere (two refractions). Checks: convergence to
 // the exact solution with a tight ε, the law of reflection / Snell's law at every found vertex, the reverse walk
-// returning to the start, a target across the silhouette failing cleanly, the symmetric virtual plane, and the
-// generalized geometry term of a refractor against a finite-difference solid-angle/area ratio obtained by tracing
-// (§6.3). Initial chains and the reference traces use the test's own reflection and Snell refraction.
+// returning to the start, a target across the silhouette failing cleanly, the symmetric virtual plane, offset
+// manifolds on the plane and (quadratic convergence) on the sphere, which triangles keep a configuration, and the
+// generalized geometry term of a refractor, in both directions (they differ by the étendue factor), against
+// finite-difference solid-angle/area ratios obtained by tracing (§6.3). Initial chains and the reference traces use
+// the test's own reflection and Snell refraction.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,6 +24,7 @@
 #include "manifold/manifold_walk.h"
 #include "manifold/specular_constraint.h"
 #include "scene/scene.h"
+#include "support/render_util.h"
 
 namespace pf::test {
 namespace {
@@ -351,6 +354,82 @@ TEST(ManifoldWalk, PlaneRefractorOffsetManifold) {
     }
 }
 
+// Offset manifolds on a curved shape: two refractions through the glass sphere about tilted microfacet normals
+// (glossy vertices). The sphere's chart (spherical coordinates) turns within the tangent plane as the point moves;
+// the glossy vertices' continuous frame (specular_constraint.h) is differentiated exactly, so the iteration
+// converges quadratically here too: a small move of the end takes a few iterations to reach ε = 1e-13 (with the
+// chart's frame and its turning left out of ∇C it converged linearly and hit the iteration limit), keeps every
+// offset, and the reverse walk returns.
+TEST(ManifoldWalk, GlassSphereOffsetManifoldConvergesQuadratically) {
+    const auto scene = loadManifoldScene("glass_sphere.xml");
+    const ManifoldWalk walker(*scene, tight());
+    PCG32 rng(14, 2);
+    int walked = 0;
+    for (int trial = 0; trial < 400 && walked < 40; ++trial) {
+        const Vec3 x1(uniform(rng, -0.5, 0.5), uniform(rng, -0.5, 0.5), 4);
+        const Vec3 aim(uniform(rng, -0.6, 0.6), uniform(rng, -0.6, 0.6), 0);
+        const Vec3 tilt(uniform(rng, -0.15, 0.15), uniform(rng, -0.15, 0.15), uniform(rng, -0.15, 0.15));
+        const auto hits = traceSpecular(*scene, x1, normalize(aim - x1), 2, tilt);
+        if (!hits || hits->back().p.z > -2.9) continue;
+        const std::vector<ManifoldVertex> chain = chainFrom(x1, *hits, false);
+        ++walked;
+        const WalkResult forward = walker.walk(chain, floorTargetNear(*scene, hits->back().p, 0.05, rng));
+        ASSERT_EQ(forward.status, WalkStatus::Converged);
+        EXPECT_LE(forward.stats.iterations, 6);
+        for (size_t i = 1; i <= 2; ++i) {
+            ASSERT_TRUE(chain[i].glossy);
+            // Recomputed from the vertex positions, whose sphere intersections carry rounding of about 1e-12.
+            const Vec2 c = *constraintValue(forward.chain[i - 1], forward.chain[i], forward.chain[i + 1]);
+            EXPECT_NEAR(c.x, chain[i].offset.x, 1e-10);
+            EXPECT_NEAR(c.y, chain[i].offset.y, 1e-10);
+        }
+        const WalkResult back = walker.walk(forward.chain, chain.back());
+        ASSERT_EQ(back.status, WalkStatus::Converged);
+        EXPECT_LE(back.stats.iterations, 6);
+        for (size_t i = 1; i <= 2; ++i) EXPECT_LT((back.chain[i].p - chain[i].p).length(), 1e-9);
+    }
+    EXPECT_EQ(walked, 40);
+}
+
+// The configuration a corrector trace must keep is the shape (with its BSDF and side), not the triangle: on a
+// flat-shaded mesh (Mitsuba's cube: one normal per face) the trace may cross to the other triangle of a face and
+// onto another face, and a trace that meets another shape is refused.
+TEST(ManifoldWalk, AnyTriangleOfTheShapeKeepsTheConfiguration) {
+    const std::string dir = tempDir("manifold_facets");
+    const auto scene = loadScene(writeFile(dir, "scene.xml", R"(<scene version="0.6.0">
+        <sensor type="perspective"><transform name="toWorld"><lookat origin="0,-12,6" target="0,0,0" up="0,0,1"/></transform>
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+        <shape type="cube"><bsdf type="conductor"/></shape>
+        <shape type="sphere"><point name="center" x="2" y="0.2" z="1.1"/><float name="radius" value="0.2"/>
+            <bsdf type="conductor"/></shape>
+        <shape type="sphere"><float name="radius" value="20"/><bsdf type="diffuse"/></shape>
+    </scene>)"));
+    const ManifoldWalk walker(*scene);
+    const Vec3 x1(3, 0.2, 2);
+    // The chain x_1 -> mirror point q -> the enclosing sphere.
+    const auto chainVia = [&](const Vec3 &q) {
+        const auto hits = traceSpecular(*scene, x1, normalize(q - x1), 1);
+        EXPECT_TRUE(hits);
+        return chainFrom(x1, *hits);
+    };
+    const auto retrace = [&](const std::vector<ManifoldVertex> &chain, const Vec3 &q) {
+        return walker.propagate(chain, x1, normalize(q - x1), nullptr);
+    };
+    // Two points of the face x = 1 on either side of its diagonal y = z, so on different triangles.
+    const Vec3 corner(1, 0.8, -0.8), opposite(1, -0.8, 0.8);
+    const std::vector<ManifoldVertex> a = chainVia(corner);
+    ASSERT_EQ(a.size(), 3u);
+    const auto sameFace = retrace(a, opposite);
+    ASSERT_TRUE(sameFace);
+    EXPECT_NE((*sameFace)[1].its.primIndex, a[1].its.primIndex);
+    // The top face z = 1, met by a ray that passes above the edge of the face x = 1.
+    const auto otherFace = retrace(a, Vec3(0.8, 0.2, 1));
+    ASSERT_TRUE(otherFace);
+    EXPECT_NEAR((*otherFace)[1].its.shFrame.n.z, 1.0, 1e-12);
+    // The small mirror sphere between x_1 and the cube is another shape.
+    EXPECT_FALSE(retrace(a, Vec3(1, 0.2, 0.2)));
+}
+
 TEST(ManifoldWalk, VirtualPlaneIsSymmetric) {
     PCG32 rng(9, 9);
     for (int trial = 0; trial < 1000; ++trial) {
@@ -417,9 +496,52 @@ void checkDirectionalGeometryTerm(const Scene &scene, const Vec3 &x0, const Vec3
     const double area = tracedArea(
         scene, specular, [&](double s, double t) { return std::make_pair(x0 + frame.s * s + frame.t * t, d); });
     EXPECT_NEAR(*g * area, 1.0, 1e-6);
-    // The reversed chain (directional end last) gives the same G.
-    const std::vector<ManifoldVertex> reversed(chain.rbegin(), chain.rend());
-    EXPECT_NEAR(*generalizedGeometry(reversed) / *g, 1.0, 1e-12);
+    // The reversed chain (directional end last, its refractions' eta inverted) gives the same G.
+    EXPECT_NEAR(*generalizedGeometry(reversedChain(chain)) / *g, 1.0, 1e-12);
+}
+
+// Through a refraction the two directions of the generalized geometry term differ (§6.3, étendue):
+// generalizedGeometry(x_1 … x_n) is the projected solid angle at x_1 per unit area at x_n, the reversed chain's
+// the projected solid angle at x_n per unit area at x_1, and η_1² dA_1 dΩ⊥_1 = η_n² dA_n dΩ⊥_n makes their ratio
+// (η_n / η_1)². x_1 lies on a (virtual) downward-facing surface in the air above the plane refractor and x_n on
+// the receiver in the glass; each direction is checked against a traced finite-difference reference.
+TEST(ManifoldWalk, RefractorGeometryTermDirectionsDifferByTheEtendueFactor) {
+    const auto scene = loadManifoldScene("plane_refractor.xml");
+    PCG32 rng(8, 3);
+    for (int trial = 0; trial < 10; ++trial) {
+        const Vec3 x1(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, 0.5, 2));
+        const Vec3 w1 = normalize(Vec3(uniform(rng, -1, 1), uniform(rng, -1, 1), 0) - x1);
+        const auto hits = traceSpecular(*scene, x1, w1, 1);
+        ASSERT_TRUE(hits);
+        std::vector<ManifoldVertex> chain = chainFrom(x1, *hits);
+        ManifoldVertex &start = chain[0];
+        start.type = ManifoldVertexType::Surface;
+        start.ng = start.n = Vec3(0, 0, -1);
+        coordinateSystem(start.ng, start.dpdu, start.dpdv);
+        const std::optional<double> fromAir = generalizedGeometry(chain),
+                                    fromGlass = generalizedGeometry(reversedChain(chain));
+        ASSERT_TRUE(fromAir && fromGlass);
+        EXPECT_NEAR(*fromAir / *fromGlass, 1.5 * 1.5, 1e-9);
+
+        // From x_1: |cos θ_1| over the area at x_n swept per unit solid angle.
+        const Frame f1(w1);
+        const double areaBelow = tracedArea(
+            *scene, 1, [&](double s, double t) { return std::make_pair(x1, normalize(w1 + f1.s * s + f1.t * t)); });
+        EXPECT_NEAR(*fromAir * areaBelow / std::abs(w1.z), 1.0, 1e-6);
+        // From x_n: rays refracted up through the interface to the plane of x_1.
+        const Vec3 xn = hits->back().p, wn = normalize(hits->front().p - xn);
+        const Frame fn(wn);
+        constexpr double h = 1e-6;
+        const auto landing = [&](double s, double t) {
+            const Vec3 d = normalize(wn + fn.s * s + fn.t * t);
+            Intersection its;
+            EXPECT_TRUE(scene->intersect(Ray(xn, d, scene->epsilonAt(xn)), its));
+            const Vec3 up = *bounce(d, its.n, 1.5);
+            return its.p + up * ((x1.z - its.p.z) / up.z);
+        };
+        const Vec3 ds = (landing(h, 0) - landing(-h, 0)) / (2 * h), dt = (landing(0, h) - landing(0, -h)) / (2 * h);
+        EXPECT_NEAR(*fromGlass * cross(ds, dt).length() / std::abs(wn.z), 1.0, 1e-6);
+    }
 }
 
 TEST(ManifoldWalk, RefractorGeometryTermMatchesTracedSolidAngleRatio) {

@@ -42,10 +42,7 @@ double geometryTerm(const ManifoldVertex &a, const ManifoldVertex &b) {
 
 std::optional<double> generalizedGeometry(const std::vector<ManifoldVertex> &chain) {
     if (chain.size() < 2) return std::nullopt;
-    if (chain.back().type == ManifoldVertexType::FixedDirection) {
-        std::vector<ManifoldVertex> reversed(chain.rbegin(), chain.rend());
-        return generalizedGeometry(reversed);
-    }
+    if (chain.back().type == ManifoldVertexType::FixedDirection) return generalizedGeometry(reversedChain(chain));
     if (chain.size() == 2) return geometryTerm(chain[0], chain[1]);
     ChainJacobian jacobian;
     if (!jacobian.build(chain)) return std::nullopt;

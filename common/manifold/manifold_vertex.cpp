@@ -74,6 +74,7 @@ std::optional<ManifoldVertex> ManifoldVertex::constrained(const Intersection &it
     if (!h) return std::nullopt;
     v->halfVectorAbove = dot(*h, v->n) > 0;
     if (!ideal) {
+        v->glossy = true;
         const std::optional<Vec2> c = constraintValue(a, *v, b);
         if (!c) return std::nullopt;
         v->offset = *c;
@@ -128,6 +129,16 @@ std::optional<ManifoldVertex> ManifoldVertex::endpoint(const PathVertex &pv, con
         default:
             return std::nullopt;
     }
+}
+
+std::vector<ManifoldVertex> reversedChain(const std::vector<ManifoldVertex> &chain) {
+    std::vector<ManifoldVertex> reversed(chain.rbegin(), chain.rend());
+    for (ManifoldVertex &v : reversed) {
+        if (v.scattering != Scattering::Refraction) continue;
+        v.eta = 1.0 / v.eta;
+        v.predecessorAbove = !v.predecessorAbove;
+    }
+    return reversed;
 }
 
 std::optional<ManifoldVertex> virtualPlane(const Vec3 &p, const Vec3 &n, const Vec3 &pTarget, const Vec3 &nTarget) {

@@ -23,6 +23,7 @@
 #pragma once
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "core/vector.h"
 #include "manifold/mat2.h"
@@ -51,6 +52,10 @@ struct ManifoldVertex {
     double eta = 1.0;
     // Offset manifold S_o (§6.6): the constraint's target value. Zero for ideal specular vertices.
     Vec2 offset;
+    // Whether the vertex is walked on its offset manifold (a glossy vertex treated as specular, §6.6). Its
+    // offset is then measured in the continuous tangent frame of specular_constraint.h, which is a function of
+    // the shading normal alone, instead of [TR A2]'s frame from the chart (see there for why).
+    bool glossy = false;
     // Sign of <h, n> of the half-vector the offset was taken from: with o it recovers the microfacet normal
     // m = o_x s + o_y t ± sqrt(1 - |o|^2) n (microfacetNormal() in specular_constraint.h).
     bool halfVectorAbove = true;
@@ -77,7 +82,8 @@ struct ManifoldVertex {
     // when both lie on the same side of the geometric normal, refraction otherwise, with eta from the BSDF's
     // interior/exterior ratio and the side prev lies on; the offset and its sign are set from the current
     // half-vector, so that a glossy vertex stays on its offset manifold (pass ideal = true to force o = 0 for
-    // ideal specular vertices). Returns nullopt on a degenerate chart or half-vector.
+    // ideal specular vertices; ideal = false sets `glossy`). Returns nullopt on a degenerate chart, frame or
+    // half-vector.
     static std::optional<ManifoldVertex> constrained(const Intersection &its, const Vec3 &prev, const Vec3 &next,
                                                      bool ideal);
     static ManifoldVertex fixedPosition(const Vec3 &p);
@@ -90,6 +96,11 @@ struct ManifoldVertex {
     // towards `neighbour`), medium vertices MediumEndpoint. Returns nullopt for supernodes.
     static std::optional<ManifoldVertex> endpoint(const PathVertex &v, const Vec3 &neighbour);
 };
+
+// The chain listed the other way round. The constrained vertices' eta and predecessorAbove are relative to chain
+// order, so a refraction's eta becomes 1 / eta and its predecessor's side flips; the half-vector
+// γ(ω_i + eta ω_o) keeps its direction (γ(ω_o + ω_i / eta) is parallel to it), and with it the offset.
+std::vector<ManifoldVertex> reversedChain(const std::vector<ManifoldVertex> &chain);
 
 // The symmetric virtual plane of WalkManifold (§6.4, [TR §4]) through the current endpoint position p (normal
 // n) and the target p' (normal n'): n_plane = γ(γ(n + n') - d <γ(n + n'), d>), d = γ(p' - p), with n' flipped

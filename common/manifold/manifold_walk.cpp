@@ -56,6 +56,7 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
         std::optional<ManifoldVertex> v = ManifoldVertex::surface(its, old.scattering, old.eta);
         if (!v) return std::nullopt;
         v->offset = old.offset;
+        v->glossy = old.glossy;
         v->halfVectorAbove = old.halfVectorAbove;
         v->predecessorAbove = old.predecessorAbove;
         const std::optional<Vec3> m = microfacetNormal(*v);

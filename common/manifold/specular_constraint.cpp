@@ -4,12 +4,51 @@ namespace pf {
 
 namespace {
 
-// The unnormalized shading tangent frame T = [s t] of [TR A2]: the chart's partials with their component
-// along the shading normal removed (Gram-Schmidt against n, §6.1). Not normalized, as in the listing, so
-// that its derivatives are the simple ones below.
-void shadingTangents(const ManifoldVertex &v, Vec3 &s, Vec3 &t) {
-    s = v.dpdu - v.n * dot(v.dpdu, v.n);
-    t = v.dpdv - v.n * dot(v.dpdv, v.n);
+// The fixed direction a whose projection spans the continuous frame of glossy vertices (header). A continuous
+// tangent field on a closed surface must vanish somewhere, so the frame has poles, at n = ±a; this a keeps them
+// as far as possible (54.7 degrees) from the six axis directions, the normals of axis-aligned planes and of the
+// tops, bottoms and sides of shapes in scenes built with a y or z up axis.
+const Vec3 kFrameDirection = Vec3(1.0, 1.0, 1.0) / std::sqrt(3.0);
+
+// The tangent frame T = [s t] of a constrained Surface vertex (header) and its derivatives along the chart
+// coordinates u and v, under the first-order vertex model n(u, v) = n + u dn/du + v dn/dv (§6.2).
+struct TangentFrame {
+    Vec3 s, t;
+    Vec3 ds[2], dt[2];  // ∂s/∂u, ∂s/∂v and ∂t/∂u, ∂t/∂v
+};
+
+// The projection a - <a, n> n of a fixed vector a onto the shading tangent plane, and its derivatives
+// -<a, ∂n> n - <a, n> ∂n ([TR A2]'s tangent-frame derivatives, §6.2).
+void projectedTangent(const ManifoldVertex &v, const Vec3 &a, Vec3 &s, Vec3 ds[2]) {
+    const double an = dot(a, v.n);
+    s = a - v.n * an;
+    ds[0] = v.n * -dot(a, v.dndu) - v.dndu * an;
+    ds[1] = v.n * -dot(a, v.dndv) - v.dndv * an;
+}
+
+std::optional<TangentFrame> tangentFrame(const ManifoldVertex &v) {
+    TangentFrame f;
+    if (!v.glossy) {
+        // [TR A2]: the chart's partials projected onto the shading tangent plane, not normalized. The chart
+        // vectors are held fixed, which is exact on planes and mesh triangles.
+        projectedTangent(v, v.dpdu, f.s, f.ds);
+        projectedTangent(v, v.dpdv, f.t, f.dt);
+        return f;
+    }
+    // ŝ = γ(a - <a, n> n), t = n × ŝ: a function of the shading normal alone, so continuous wherever n is,
+    // and differentiated exactly through ∂γ(z) = (I - ẑ ẑ^T) ∂z / |z|.
+    Vec3 s0, ds0[2];
+    projectedTangent(v, kFrameDirection, s0, ds0);
+    const double length = s0.length();
+    if (!(length > 1e-9) || !std::isfinite(length)) return std::nullopt;
+    f.s = s0 / length;
+    f.t = cross(v.n, f.s);
+    const Vec3 dn[2] = {v.dndu, v.dndv};
+    for (int k = 0; k < 2; ++k) {
+        f.ds[k] = (ds0[k] - f.s * dot(f.s, ds0[k])) / length;
+        f.dt[k] = cross(dn[k], f.s) + cross(v.n, f.ds[k]);
+    }
+    return f;
 }
 
 // Unit direction from `from` to `to` and the inverse distance; false for coincident points.
@@ -71,10 +110,9 @@ std::optional<Vec2> constraintValue(const ManifoldVertex &prev, const ManifoldVe
         return Vec2(dot(v.dpdu, w), dot(v.dpdv, w));
     }
     const std::optional<Vec3> h = generalizedHalfVector(prev, v, next);
-    if (!h) return std::nullopt;
-    Vec3 s, t;
-    shadingTangents(v, s, t);
-    return Vec2(dot(*h, s), dot(*h, t));
+    const std::optional<TangentFrame> f = tangentFrame(v);
+    if (!h || !f) return std::nullopt;
+    return Vec2(dot(*h, f->s), dot(*h, f->t));
 }
 
 // A port of computeDerivatives of [TR A2] (not the thesis listing, whose diagonal (0,1) entry has the dpdv/dndv
@@ -91,11 +129,9 @@ std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex 
     if (!(hl > 1e-12) || !std::isfinite(hl)) return std::nullopt;
     const double ilh = 1.0 / hl;
     h *= ilh;
-
-    const double hn = dot(v.n, h), hdndu = dot(v.dndu, h), hdndv = dot(v.dndv, h);
-    const double un = dot(v.dpdu, v.n), vn = dot(v.dpdv, v.n);
-    Vec3 s, t;
-    shadingTangents(v, s, t);
+    const std::optional<TangentFrame> f = tangentFrame(v);
+    if (!f) return std::nullopt;
+    const Vec3 &s = f->s, &t = f->t;
     // Scale factors of ∂ω_i and eta ∂ω_o, including the 1/|z| of h's normalization.
     const double si = ili * ilh, so = ilo * v.eta * ilh;
 
@@ -106,16 +142,16 @@ std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex 
     // Moving x_i moves both directions: ∂ω_i/∂u = -(I - ω_i ω_i^T) dp/du / |x_{i-1} - x_i|, likewise ω_o.
     const Vec3 dHdu = projectOut(v.dpdu * -(si + so) + wi * (dot(wi, v.dpdu) * si) + wo * (dot(wo, v.dpdu) * so), h);
     const Vec3 dHdv = projectOut(v.dpdv * -(si + so) + wi * (dot(wi, v.dpdv) * si) + wo * (dot(wo, v.dpdv) * so), h);
-    // Frame derivatives with h fixed: ∂s/∂u = -<dp/du, ∂_u n> n - <dp/du, n> ∂_u n (first-order vertex model).
-    d.self = Mat2(
-        dot(dHdu, s) - dot(v.dpdu, v.dndu) * hn - un * hdndu, dot(dHdv, s) - dot(v.dpdu, v.dndv) * hn - un * hdndv,
-        dot(dHdu, t) - dot(v.dpdv, v.dndu) * hn - vn * hdndu, dot(dHdv, t) - dot(v.dpdv, v.dndv) * hn - vn * hdndv);
+    // Plus the frame's derivatives with h fixed (tangentFrame()).
+    d.self =
+        frameBlock(dHdu, dHdv, s, t) + Mat2(dot(f->ds[0], h), dot(f->ds[1], h), dot(f->dt[0], h), dot(f->dt[1], h));
     return d;
 }
 
 std::optional<Vec3> microfacetNormal(const ManifoldVertex &v) {
-    Vec3 s, t;
-    shadingTangents(v, s, t);
+    const std::optional<TangentFrame> f = tangentFrame(v);
+    if (!f) return std::nullopt;
+    const Vec3 &s = f->s, &t = f->t;
     // The tangential part of m is a s + b t with <m, s> = o_x and <m, t> = o_y: a 2x2 Gram system.
     const Mat2 gram(dot(s, s), dot(s, t), dot(s, t), dot(t, t));
     Mat2 inv;

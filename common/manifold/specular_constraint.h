@@ -2,16 +2,31 @@
 //
 // For a constrained Surface vertex x_i with neighbours x_{i-1}, x_{i+1} (chain order):
 //
-//     c_i = T(x_i)^T h_i,   h_i = γ(ω_i + eta ω_o),   T = [s t],  s = dp/du - <dp/du, n> n,  t = dp/dv - <dp/dv, n> n
+//     c_i = T(x_i)^T h_i,   h_i = γ(ω_i + eta ω_o),   T = [s t]
 //
 // with ω_i, ω_o the unit directions towards x_{i-1} and x_{i+1}, n the shading normal and eta the vertex's
 // relative index (manifold_vertex.h). h is normalized on purpose: the glossy extension recovers the microfacet
 // normal from its tangent projection (§6.6). The constraint holds when c_i equals the vertex's offset o_i.
 // For a FixedDirection endpoint, c_1 = T(x_1)^T γ(x_2 - x_1) with T its chart ⟂ d (§6.1).
 //
+// The tangent frame T spans the shading tangent plane. Two frame fields are used:
+// * Ideal specular vertices (o = 0): [TR A2]'s s = dp/du - <dp/du, n> n, t = dp/dv - <dp/dv, n> n from the
+//   orthonormal chart. Where c = 0 only the plane T spans matters (h ∥ n), not how T turns within it, so the
+//   chart's own turning (spherical coordinates, the per-triangle charts of a mesh) never affects the solution.
+// * Glossy vertices on offset manifolds (ManifoldVertex::glossy): there o ≠ 0 is a vector in T's coordinates,
+//   so the frame field defines the manifold and must be continuous and differentiated exactly. The chart's frame
+//   is neither: it jumps across mesh triangles (one chart per triangle), and ∇C's first-order model keeps the
+//   chart vectors fixed, which misses how spherical or polar coordinates turn within the tangent plane (the
+//   walk then converges only linearly). Instead ŝ = γ(a - <a, n> n) for a fixed direction a and t = n × ŝ: a
+//   function of the shading normal alone (continuous across triangles with interpolated normals, ALGORITHMS.md
+//   §9.2 "continuous tangent frames"), whose derivatives follow exactly from dn/du and dn/dv, so that ∇C is
+//   exact for the offset manifold and the walk converges quadratically. It is undefined only where n = ±a
+//   (functions below return nullopt there).
+//
 // The derivatives are the three 2x2 blocks of ∇C in the vertex's row, with respect to the chart coordinates
 // (u, v) of x_{i-1}, x_i and x_{i+1} (the TR listing's A, B, C; the thesis listing's dpdv/dndv typo is not
-// reproduced). They assume orthonormal charts, which ManifoldVertex guarantees.
+// reproduced). They assume orthonormal charts, which ManifoldVertex guarantees. The frame's choice changes
+// each row of ∇C by an invertible 2x2 factor only, so T_S and the generalized geometry term do not depend on it.
 #pragma once
 #include <optional>
 
@@ -41,8 +56,8 @@ std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex 
                                                            const ManifoldVertex &next);
 
 // The microfacet normal of the offset manifold (§6.6): the unit vector m with T^T m = offset and the sign of
-// <m, n> given by v.halfVectorAbove. T's columns s, t are not orthonormal under shading normals, so the
-// tangential part is solved from their Gram matrix. nullopt if |tangential part| >= 1.
+// <m, n> given by v.halfVectorAbove. The chart frame's columns s, t are not orthonormal under shading normals,
+// so the tangential part is solved from their Gram matrix. nullopt if |tangential part| >= 1.
 std::optional<Vec3> microfacetNormal(const ManifoldVertex &v);
 
 // Scatters the unit direction wi (pointing from the vertex towards where the light came from) about the unit
