@@ -3,6 +3,9 @@
 // splat into the pixel a path lands in, so a BDPT reference needs the same one-pixel footprint) and a chosen
 // sampleCount (ERPT's seeds per pixel); ERPT with a single mutation; a render's mutation counts.
 #pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -55,8 +58,13 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
     const std::string dir =
         tempDir("mlt-scene-" + name + "-" + std::to_string(res) + "-" + std::to_string(sampleCount));
     std::string xml = name == "pool" ? poolScene("0, 4, 3") : poolScene("0.3, 0.8, 0.4");
+    // "<scene>-analytic": the scene with its sphere meshes replaced by analytic spheres (same geometry).
+    const std::string analyticSuffix = "-analytic";
+    const bool analytic = name.size() > analyticSuffix.size() &&
+                          name.compare(name.size() - analyticSuffix.size(), analyticSuffix.size(), analyticSuffix) == 0;
     if (name.rfind("pool", 0) != 0) {
-        const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" / name;
+        const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" /
+                             (analytic ? name.substr(0, name.size() - analyticSuffix.size()) : name);
         for (const auto &entry : fs::directory_iterator(src))
             if (entry.path().filename() != "scene.xml")
                 fs::create_symlink(entry.path(), fs::path(dir) / entry.path().filename());
@@ -64,6 +72,10 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
         std::stringstream text;
         text << in.rdbuf();
         xml = std::regex_replace(text.str(), std::regex(R"(<rfilter type="[a-z]+"\s*/>)"), R"(<rfilter type="box"/>)");
+        if (analytic)
+            xml = std::regex_replace(
+                xml, std::regex(R"(<shape type="obj">\s*<string name="filename" value="models/sphere.obj"\s*/>)"),
+                R"(<shape type="sphere">)");
     }
     xml = std::regex_replace(xml, std::regex(R"(<integer name="sampleCount" value="\d+"\s*/>)"),
                              "<integer name=\"sampleCount\" value=\"" + std::to_string(sampleCount) + "\"/>");
@@ -81,37 +93,87 @@ inline std::vector<std::pair<std::string, std::string>> singleMutation(MutationT
     return params;
 }
 
-// The per-type counts of one render's chain tasks.
-inline MutationCounts mutationCounts(const Scene &scene, const Integrator &integrator) {
+// The per-type counts and the further chain counters (the manifold walks) of one render's chain tasks, with
+// `spp` the render's budget (seeds per pixel for erpt, mutations per pixel for mlt), seeded with 3.
+struct ChainStatistics {
+    MutationCounts counts;
+    ChainCounters counters;
+};
+inline ChainStatistics chainStatistics(const Scene &scene, const Integrator &integrator, int64_t spp) {
     const auto &chains = dynamic_cast<const ChainIntegrator &>(integrator);
     const Normalizer normalizer = seedChains(scene, chains, 3);
-    MutationCounts counts;
-    const int64_t spp = scene.sensor().sampleCount();
-    for (uint64_t k = 0; k < chains.chainTaskCount(scene, spp); ++k)
-        addCounts(counts, runChainTask(scene, chains, 3, chains.chainTask(scene, normalizer, 3, spp, k)).counts);
-    return counts;
+    ChainStatistics stats;
+    for (uint64_t k = 0; k < chains.chainTaskCount(scene, spp); ++k) {
+        const ChainResult r = runChainTask(scene, chains, 3, chains.chainTask(scene, normalizer, 3, spp, k));
+        addCounts(stats.counts, r.counts);
+        addCounters(stats.counters, r.counters);
+    }
+    return stats;
+}
+
+// The per-type counts of one render's chain tasks at the scene's sampleCount.
+inline MutationCounts mutationCounts(const Scene &scene, const Integrator &integrator) {
+    return chainStatistics(scene, integrator, scene.sensor().sampleCount()).counts;
+}
+
+// The longest paths a comparison renders: the scene's maxDepth (0), or `maxDepth` edges.
+inline std::vector<std::pair<std::string, std::string>> withMaxDepth(
+    std::vector<std::pair<std::string, std::string>> params, int maxDepth) {
+    if (maxDepth != 0) params.emplace_back("maxDepth", std::to_string(maxDepth));
+    return params;
 }
 
 // A BDPT reference: block means over `seeds` renders of `spp` samples per pixel, computed once per
-// (scene, resolution, seeds, spp) for all the cases of a test binary.
-inline const BlockStats &bdptReference(const std::string &name, const Scene &scene, int block, int seeds, int spp) {
+// (scene, resolution, seeds, spp, maxDepth) for all the cases of a test binary.
+inline const BlockStats &bdptReference(const std::string &name, const Scene &scene, int block, int seeds, int spp,
+                                       int maxDepth) {
     static std::map<std::string, BlockStats> cache;
     const Film &film = scene.sensor().film();
     const std::string key = name + "/" + std::to_string(film.cropWidth()) + "/" + std::to_string(block) + "/" +
-                            std::to_string(seeds) + "/" + std::to_string(spp);
+                            std::to_string(seeds) + "/" + std::to_string(spp) + "/" + std::to_string(maxDepth);
     const auto it = cache.find(key);
     if (it != cache.end()) return it->second;
-    return cache[key] = blockStats(scene, *makeTestIntegrator(scene, "bdpt", {}), block, seeds, spp, 1);
+    return cache[key] =
+               blockStats(scene, *makeTestIntegrator(scene, "bdpt", withMaxDepth({}, maxDepth)), block, seeds, spp, 1);
 }
 
 // How a convergence test is run: image size, block size, renders, the reference's samples per pixel, the
-// chains' budget (mutations per pixel for mlt, the scene's sampleCount of seeds for erpt) and the agreement
-// thresholds (in standard errors, and the largest median block error and image error that still allow a
-// meaningful comparison).
+// chains' budget (mutations per pixel for mlt, the scene's sampleCount of seeds for erpt), the longest paths
+// of both (0: the scene's maxDepth) and the agreement thresholds (in standard errors, and the largest median
+// block error and image error that still allow a meaningful comparison).
 struct ConvergenceSetup {
     int res = 16, block = 8, seeds = 16, referenceSpp = 64, budget = 32;
     double sigmas = 4.5, maxMedianError = 0.05, maxImageError = 0.03;
+    int maxDepth = 0;
 };
+
+// The figures of a comparison, printed by every convergence case for the record: the median relative
+// combined standard error of the blocks expectBlocksAgree weighs (those above 1% of the image's mean), the
+// whole image's, and the largest |z| = |test - reference| / (combined standard error) over all comparisons.
+inline void printAgreement(const BlockStats &reference, const BlockStats &test, const std::string &what) {
+    std::vector<double> relative;
+    double worst = 0;
+    size_t worstIndex = 0;
+    for (size_t i = 0; i < reference.mean.size(); ++i) {
+        const double se = std::hypot(reference.stderr_[i], test.stderr_[i]);
+        const double z = se > 0 ? std::abs(test.mean[i] - reference.mean[i]) / se : 0.0;
+        if (z > worst) {
+            worst = z;
+            worstIndex = i;
+        }
+        if (i + 1 < reference.mean.size() && reference.mean[i] > 0.01 * reference.mean.back())
+            relative.push_back(se / reference.mean[i]);
+    }
+    std::sort(relative.begin(), relative.end());
+    const double image = std::hypot(reference.stderr_.back(), test.stderr_.back()) / reference.mean.back();
+    std::printf(
+        "%s: %zu comparisons, median block error %.2f%%, image error %.2f%% (image %+.2f%%), worst |z| %.2f (%s)\n",
+        what.c_str(), reference.mean.size(), relative.empty() ? 0.0 : 100 * relative[relative.size() / 2], 100 * image,
+        100 * (test.mean.back() / reference.mean.back() - 1), worst,
+        worstIndex + 1 == reference.mean.size()
+            ? "whole image"
+            : ("block " + std::to_string(worstIndex / 3) + " channel " + std::to_string(worstIndex % 3)).c_str());
+}
 
 // `integrator` (params on top of the scene's maxDepth) on `name` agrees with BDPT.
 inline void expectConvergence(const std::string &name, const std::string &type,
@@ -119,21 +181,27 @@ inline void expectConvergence(const std::string &name, const std::string &type,
                               const std::string &what) {
     const bool bursts = type == "erpt";
     auto scene = loadMLTTestScene(name, s.res, bursts ? s.budget : 4);
-    const auto integrator = makeTestIntegrator(*scene, type, params);
+    const auto integrator = makeTestIntegrator(*scene, type, withMaxDepth(params, s.maxDepth));
     const BlockStats chains = blockStats(*scene, *integrator, s.block, s.seeds, bursts ? 0 : s.budget, 2);
-    expectBlocksAgree(bdptReference(name, *scene, s.block, s.seeds, s.referenceSpp), chains, s.sigmas, s.maxMedianError,
-                      s.maxImageError, what);
+    const BlockStats &reference = bdptReference(name, *scene, s.block, s.seeds, s.referenceSpp, s.maxDepth);
+    printAgreement(reference, chains, what);
+    expectBlocksAgree(reference, chains, s.sigmas, s.maxMedianError, s.maxImageError, what);
 }
 
-// ERPT with the single mutation `type` agrees with BDPT, and that mutation is accepted often enough to have
-// shown a bias (a mutation that never moves cannot bias anything): in at least 2% of its proposals.
-inline void expectSingleMutationConvergence(const std::string &name, MutationType type, const ConvergenceSetup &s) {
+// ERPT with the single mutation `type` (and `params`, e.g. numChains) agrees with BDPT, and that mutation is
+// accepted often enough to have shown a bias (a mutation that never moves cannot bias anything): in at least
+// 2% of its proposals.
+inline void expectSingleMutationConvergence(const std::string &name, MutationType type, const ConvergenceSetup &s,
+                                            const std::vector<std::pair<std::string, std::string>> &params = {}) {
+    auto all = singleMutation(type);
+    all.insert(all.end(), params.begin(), params.end());
     auto scene = loadMLTTestScene(name, s.res, s.budget);
-    for (const MutationCount &count : mutationCounts(*scene, *makeTestIntegrator(*scene, "erpt", singleMutation(type))))
+    const auto integrator = makeTestIntegrator(*scene, "erpt", withMaxDepth(all, s.maxDepth));
+    for (const MutationCount &count : mutationCounts(*scene, *integrator))
         if (count.name == mutationName(type)) {
             EXPECT_GT(count.accepted, count.proposed / 50) << count.name << " is hardly ever accepted";
         }
-    expectConvergence(name, "erpt", singleMutation(type), s, name + " " + mutationName(type));
+    expectConvergence(name, "erpt", all, s, name + " " + mutationName(type));
 }
 
 }  // namespace pf::test
