@@ -16,7 +16,7 @@
 // Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
 // numChains (1), maxChains (0: no cap on the chains of one seed), chainLength (100), lensPerturbation (true),
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
-// (false), manifoldPerturbation (false), lambda (50),
+// (false), manifoldPerturbation (false), lambda (50), manifoldGlossyAngle (1),
 // luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
 // see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel (default: the scene's
 // sampleCount; see seeding()).

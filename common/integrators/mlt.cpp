@@ -44,6 +44,9 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda.
     lambda_ = props.getFloat("probFactor", props.getFloat("lambda", 50));
     if (!(lambda_ > 0) || !std::isfinite(lambda_)) props.fail("lambda", "must be positive");
+    const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
+    if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
+    glossyAngle_ = glossyAngle * kPi / 180;
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -78,7 +81,7 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
             case MutationType::Manifold:
-                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda_));
+                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda_, glossyAngle_));
                 break;
         }
     return set;

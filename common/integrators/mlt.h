@@ -17,6 +17,9 @@
 //   manifoldPerturbation (false)   manifold exploration's manifold perturbation (path/manifold_perturbation.h)
 //   lambda (50)                    the manifold perturbation's jump size (Mitsuba also reads probFactor,
 //                                  which takes precedence)
+//   manifoldGlossyAngle (1)        dtheta of the manifold perturbation's glossy classification, in degrees:
+//                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
+//                                  value); 0 leaves every glossy vertex non-specular
 //   twoStage (false)               rejected when true: two-stage MLT is not implemented
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
@@ -65,7 +68,7 @@ private:
     std::unique_ptr<BDPT> bdpt_, direct_;
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
-    double lambda_ = 50;
+    double lambda_ = 50, glossyAngle_ = 0;
     std::vector<MutationType> types_;
 };
 

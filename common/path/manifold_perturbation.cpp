@@ -1,9 +1,13 @@
 #include "path/manifold_perturbation.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 
+#include "core/frame.h"
 #include "manifold/generalized_geometry.h"
+#include "manifold/offset_jacobian.h"
+#include "manifold/roughness.h"
 #include "path/perturbation.h"
 #include "scene/scene.h"
 
@@ -11,45 +15,52 @@ namespace pf {
 
 namespace {
 
-// How far (relative to the scene scale) the second chain traced from x_f may land from the moving vertex
-// found by the walk before the proposal is dropped: the walk converges to 1e-7 of it.
-constexpr double kLandingTolerance = 1e-5;
-// How close, relative to the length of x_f's edge, the reverse walk's first vertex must come back to x's
-// (Mitsuba compares the first walked vertex with a relative tolerance, §6.5).
-constexpr double kReverseTolerance = 1e-4;
+// Paths traced through the scene lie off the specular manifold by a few ray offsets: every ray of the path-space
+// random walks and of propagate() starts Scene::epsilonAt() off its surface along the normal, which moves the
+// rest of a specular chain sideways. Walks, by contrast, converge onto the manifold to 1e-7 of the scene scale.
+// So a chain traced from x_c through the walked chain lands near, not on, the walked vertices, and the reverse
+// walk returns near, not onto, x's stored chain. Both comparisons below allow this many ray offsets at the vertex
+// compared (measured: up to about 10 on TORUS and veach-bidir, rarely 100 near caustic folds; another branch of
+// the manifold lies much further away).
+constexpr double kRayOffsets = 100;
 
 TransportMode walkMode(int dir) { return dir > 0 ? TransportMode::Importance : TransportMode::Radiance; }
-
-// The next non-specular vertex from `from` in direction dir, or -1 past the end of the path.
-int nextNonSpecular(const PathView &x, int from, int dir) {
-    for (int j = from + dir; j >= 0 && j < x.length(); j += dir)
-        if (isNonSpecular(x.vertex(j))) return j;
-    return -1;
-}
 
 // Endpoint nodes a strategy can use: a position on a shape, or a point (the environment has neither).
 bool usableEnd(const PathVertex &v) {
     return v.type != VertexType::EmitterNode || v.its.shape != nullptr || v.hasDeltaPosition();
 }
 
-// The chain x_from .. x_to of path p for WalkManifold and the generalized geometry term: non-specular ends
-// and ideal specular vertices in between, in order from `from`.
-std::optional<std::vector<ManifoldVertex>> manifoldChain(const PathView &p, int from, int to) {
+// The chain x_from .. x_to of path p for WalkManifold, the generalized geometry term and the offset
+// Jacobian: non-specular ends, the unconstrained x_b at index `free` (if any), and constrained vertices in
+// between, ideal specular ones with o = 0 and the glossy ones with their current offsets (§6.6), in order
+// from `from`.
+std::optional<std::vector<ManifoldVertex>> manifoldChain(const PathView &p, int from, int to, int free = -1) {
     const int dir = to > from ? 1 : -1;
     std::vector<ManifoldVertex> chain;
     const auto first = ManifoldVertex::endpoint(p.vertex(from), p.vertex(from + dir).position());
     if (!first) return std::nullopt;
     chain.push_back(*first);
     for (int i = from + dir; i != to; i += dir) {
-        const auto v = ManifoldVertex::constrained(p.vertex(i).its, p.vertex(i - dir).position(),
-                                                   p.vertex(i + dir).position(), true);
-        if (!v) return std::nullopt;
-        chain.push_back(*v);
+        const PathVertex &v = p.vertex(i);
+        const auto mv = i == free ? ManifoldVertex::surface(v.its)
+                                  : ManifoldVertex::constrained(v.its, p.vertex(i - dir).position(),
+                                                                p.vertex(i + dir).position(), !isNonSpecular(v));
+        if (!mv) return std::nullopt;
+        chain.push_back(*mv);
     }
     const auto last = ManifoldVertex::endpoint(p.vertex(to), p.vertex(to - dir).position());
     if (!last) return std::nullopt;
     chain.push_back(*last);
     return chain;
+}
+
+// The next vertex after `cur` (towards `end`) that is not ideal specular in x, or `end`.
+int nextSmooth(const PathView &x, int cur, int end) {
+    const int dir = end > cur ? 1 : -1;
+    int next = cur + dir;
+    while (next != end && !isNonSpecular(x.vertex(next))) next += dir;
+    return next;
 }
 
 bool onFilm(const Film &film, const Vec2 &raster) {
@@ -65,6 +76,46 @@ bool aimSensor(const Scene &scene, PathVertex &v, const Vec3 &d) {
     return true;
 }
 
+// Whether the source is a supernode: the move then offsets the position of the endpoint node after it.
+bool isPositionSource(const PathView &x, int source) { return source < 0 || source >= x.length(); }
+
+// Endpoint nodes whose position the endpoint position perturbation moves (§6.5): a point on an area
+// emitter or on a finite aperture.
+bool perturbablePosition(const PathVertex &v) {
+    return v.isEndpointNode() && !v.hasDeltaPosition() && (v.type == VertexType::SensorNode || v.its.shape);
+}
+
+// How far a point found on an emitter or aperture may lie off the plane of the node it was offset from:
+// planar lights and apertures keep it within the ray-offset noise.
+double offPlaneTolerance(const Scene &scene, const Vec3 &p) { return 10 * scene.epsilonAt(p); }
+
+// The endpoint node of v's emitter or aperture at point p of v's tangent plane, into `out`: found by a ray
+// along the normal from just in front of the plane. Only planar lights and apertures are perturbed: the
+// point must lie on v's plane with v's normal, so that the tangential offset is the area measure's own
+// coordinate and the kernel is symmetric (a curved light fails the move).
+bool placeEndpoint(const Scene &scene, const PathVertex &v, const Vec3 &p, PathVertex &out) {
+    const Vec3 &n = v.ps.n;
+    const double h = offPlaneTolerance(scene, p);
+    const Ray ray(p + n * h, -n, 0, 2 * h);
+    PositionSample ps;
+    if (v.type == VertexType::SensorNode) {
+        double t;
+        if (!scene.sensor().intersectAperture(ray, ps, t)) return false;
+        out = PathVertex::endpointNode(scene, ps, nullptr);
+        out.medium = v.medium;
+    } else {
+        Intersection its;
+        if (!scene.intersect(ray, its) || its.shape != v.its.shape || its.emitter() != v.emitter) return false;
+        out = PathVertex();
+        out.its = its;
+        out.medium = v.medium;
+        if (!out.cast(scene, VertexType::EmitterNode)) return false;
+        ps = out.ps;
+    }
+    out.walkMode = v.walkMode;
+    return std::abs(dot(ps.p - v.position(), n)) <= h && dot(ps.n, n) > 1 - 1e-9;
+}
+
 // The direction of the ray from `from` through point p, as rayDirection() measures it.
 Vec3 rayDirectionTo(const Scene &scene, const PathVertex &from, const Vec3 &p) {
     PathVertex to;
@@ -74,7 +125,8 @@ Vec3 rayDirectionTo(const Scene &scene, const PathVertex &from, const Vec3 &p) {
 
 }  // namespace
 
-ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda) : lambda_(lambda), walk_(scene) {}
+ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle)
+    : lambda_(lambda), glossyAngle_(glossyAngle), walk_(scene) {}
 
 // rho = G(u <-> ... <-> l) / (|cos_u| J(u -> l)) of y's chain between `end` and `moving` (header). G is
 // taken over the chain listed from u: generalizedGeometry(x_1 .. x_k) is the Jacobian of projected solid angle
@@ -95,22 +147,140 @@ double ManifoldPerturbation::measureRatio(const PathView &y, int end, int moving
     return g && denominator > 0 ? *g / denominator : 0.0;
 }
 
-std::vector<ManifoldPerturbation::Strategy> ManifoldPerturbation::strategies(const PathView &x) {
-    std::vector<Strategy> list;
-    for (int s = 0; s < x.length(); ++s) {
-        if (!isNonSpecular(x.vertex(s)) || !usableEnd(x.vertex(s))) continue;
-        for (const int dir : {1, -1}) {
-            const int m = nextNonSpecular(x, s, dir);
-            if (m < 0 || x.vertex(m).type != VertexType::Surface) continue;
-            const int f = nextNonSpecular(x, m, dir);
-            if (f < 0 || !usableEnd(x.vertex(f))) continue;
-            list.push_back({s, m, f});
+// The single edges are traced from `from` (the walk's mode), those of the ideal sub-chains are inside rho;
+// 0 when degenerate.
+double ManifoldPerturbation::toCanonical(const PathView &y, int from, int moving) {
+    const int mode = modeIndex(walkMode(moving > from ? 1 : -1));
+    double factor = 1.0;
+    for (int u = from; u != moving && factor > 0;) {
+        const int w = nextSmooth(y, u, moving);
+        if (std::abs(w - u) > 1) {
+            const double rho = measureRatio(y, u, w);
+            factor = rho > 0 ? factor / rho : 0.0;
+        } else {
+            factor *= y.edge(std::min(u, w)).pdf[mode];
         }
+        u = w;
     }
+    return factor;
+}
+
+double ManifoldPerturbation::offsetFactor(const PathView &y, const Strategy &st) {
+    // A position source has no first chain: the chain starts at the endpoint node x_b, held as an end.
+    const int from = isPositionSource(y, st.source) ? st.moving : st.source;
+    std::vector<size_t> glossy;
+    for (int u = from; u != st.fixed;) {
+        const int w = nextSmooth(y, u, st.fixed);
+        if (w != st.fixed && w != st.moving) glossy.push_back(static_cast<size_t>(std::abs(w - from)));
+        u = w;
+    }
+    if (glossy.empty()) return 1.0;
+    const auto chain = manifoldChain(y, from, st.fixed, from == st.moving ? -1 : st.moving);
+    const std::optional<double> j =
+        chain ? offsetJacobian(*chain, static_cast<size_t>(std::abs(st.moving - from)), glossy) : std::nullopt;
+    return j ? *j : 0.0;
+}
+
+double ManifoldPerturbation::measureConversion(const PathView &y, const Strategy &st) const {
+    double r = 1.0;
+    for (const int end : {st.source, st.fixed})
+        for (int u = end; u != st.moving;) {
+            const int w = nextSmooth(y, u, st.moving);
+            if (std::abs(w - u) > 1) r *= measureRatio(y, u, w);
+            u = w;
+        }
+    return r * offsetFactor(y, st);
+}
+
+double ManifoldPerturbation::chainProbability(const PathVertex &v) const {
+    if (!isNonSpecular(v)) return 1.0;
+    if (!(glossyAngle_ > 0) || v.type != VertexType::Surface) return 0.0;
+    const BSDF *bsdf = v.its.bsdf();
+    if (!(bsdf->flags() & BSDFFlags::Glossy) || (bsdf->flags() & BSDFFlags::Diffuse)) return 0.0;
+    return 1 - nonSpecularProbabilitySurface(bsdf->roughness(v.its, BSDFFlags::Glossy), glossyAngle_);
+}
+
+double ManifoldPerturbation::classificationProbability(const PathView &x, const Strategy &st) const {
+    const int dir = st.fixed > st.source ? 1 : -1;
+    double p = 1 - chainProbability(x.vertex(st.fixed));
+    for (int i = st.source + dir; i != st.fixed; i += dir) {
+        const double psi = chainProbability(x.vertex(i));
+        p *= i == st.moving ? 1 - psi : psi;
+    }
+    return p;
+}
+
+std::vector<ManifoldPerturbation::Source> ManifoldPerturbation::sources(const PathView &x) const {
+    const int n = x.length();
+    const auto inPath = [n](int i) { return i >= 0 && i < n; };
+    // Whether some classification of the vertices after x_b finds x_c.
+    const auto reachableEnd = [&](int b, int dir) {
+        for (int c = b + dir; inPath(c); c += dir) {
+            const double psiC = chainProbability(x.vertex(c));
+            if (psiC < 1 && usableEnd(x.vertex(c))) return true;
+            if (psiC <= 0) break;
+        }
+        return false;
+    };
+    // Whether some classification of the vertices after `s` finds x_b and x_c.
+    const auto reachable = [&](int s, int dir) {
+        for (int b = s + dir; inPath(b); b += dir) {
+            const double psiB = chainProbability(x.vertex(b));
+            if (psiB < 1 && x.vertex(b).type == VertexType::Surface && reachableEnd(b, dir)) return true;
+            if (psiB <= 0) return false;
+        }
+        return false;
+    };
+    std::vector<Source> list;
+    for (int s = 0; s < n; ++s) {
+        if (!isNonSpecular(x.vertex(s)) || !usableEnd(x.vertex(s))) continue;
+        for (const int dir : {1, -1})
+            if (reachable(s, dir)) list.push_back({s, dir});
+    }
+    // The supernodes, whose move offsets the position of the light or aperture node (§6.5).
+    if (perturbablePosition(x.vertex(0)) && reachableEnd(0, 1)) list.push_back({-1, 1});
+    if (perturbablePosition(x.vertex(n - 1)) && reachableEnd(n - 1, -1)) list.push_back({n, -1});
     return list;
 }
 
-bool ManifoldPerturbation::applies(const PathView &x) const { return !strategies(x).empty(); }
+std::optional<ManifoldPerturbation::Strategy> ManifoldPerturbation::classify(Sampler &sampler, const PathView &x,
+                                                                             const Source &source) const {
+    // A position source moves the endpoint node itself.
+    int moving = isPositionSource(x, source.vertex) ? source.vertex + source.dir : -1;
+    for (int j = (moving >= 0 ? moving : source.vertex) + source.dir; j >= 0 && j < x.length(); j += source.dir) {
+        const double psi = chainProbability(x.vertex(j));
+        if (psi >= 1 || (psi > 0 && sampler.next1D() < psi)) continue;
+        if (moving >= 0) {
+            if (!usableEnd(x.vertex(j))) return std::nullopt;
+            return Strategy{source.vertex, moving, j};
+        }
+        if (x.vertex(j).type != VertexType::Surface) return std::nullopt;
+        moving = j;
+    }
+    return std::nullopt;
+}
+
+bool ManifoldPerturbation::applies(const PathView &x) const { return !sources(x).empty(); }
+
+ManifoldPerturbation::GaussianOffset ManifoldPerturbation::positionKernel(const Scene &scene,
+                                                                          const PathVertex &v) const {
+    // The node's ps.pdf depends on which walk made it (direct sampling leaves another measure): evaluate.
+    const double uniform =
+        v.type == VertexType::SensorNode ? scene.sensor().pdfPosition(v.ps) : v.emitter->pdfPosition(v.ps);
+    const double area = uniform > 0 ? 1 / uniform : 0.0;
+    return {area / (2 * kPi * lambda_ * lambda_)};
+}
+
+Vec2 ManifoldPerturbation::GaussianOffset::sample(const Vec2 &u) const {
+    // Box-Muller.
+    const double r = std::sqrt(-2 * variance * std::log1p(-u.x)), phi = 2 * kPi * u.y;
+    return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+double ManifoldPerturbation::GaussianOffset::eval(const Vec2 &offset) const {
+    if (!(variance > 0)) return 0.0;
+    return std::exp(-(offset.x * offset.x + offset.y * offset.y) / (2 * variance)) / (2 * kPi * variance);
+}
 
 VonMisesFisher ManifoldPerturbation::kernel(const Scene &scene, const PathView &x, int source, int dir) const {
     // p(w_i -> w_o): x_s's own sampling density of its successor, per unit area there, back to solid angle.
@@ -127,25 +297,61 @@ VonMisesFisher ManifoldPerturbation::kernel(const Scene &scene, const PathView &
 
 bool ManifoldPerturbation::sample(const Scene &scene, Sampler &sampler, const MutablePath &x, MutablePath &y,
                                   MutationRecord &record) const {
-    const std::vector<Strategy> list = strategies(x);
+    const std::vector<Source> list = sources(x);
     if (list.empty()) return false;
     const size_t pick = std::min(list.size() - 1, static_cast<size_t>(sampler.next1D() * list.size()));
-    const Strategy st = list[pick];
-    record = {std::min(st.source, st.fixed), std::max(st.source, st.fixed), std::abs(st.fixed - st.source) - 1,
-              st.source};
-    const int dir = st.moving > st.source ? 1 : -1;
-    const Vec3 mean = rayDirection(scene, x.vertex(st.source), x.vertex(st.source + dir));
-    const Vec3 d = kernel(scene, x, st.source, dir).sample(mean, sampler.next2D());
+    const Source source = list[pick];
+    const Vec2 u = sampler.next2D();
+    const std::optional<Strategy> st = classify(sampler, x, source);
+    if (!st) return false;
+    record = {std::min(st->source, st->fixed), std::max(st->source, st->fixed), std::abs(st->fixed - st->source) - 1,
+              st->source, st->moving};
     y = x;
-    if (!aimSensor(scene, y.vertex(st.source), d)) return false;
-    if (!propagate(scene, sampler, walkMode(dir), x, y, st.source, st.moving, d)) return false;
-    if (std::abs(st.fixed - st.moving) == 1) return connectJunction(scene, y, std::min(st.moving, st.fixed));
-    return connectChain(scene, sampler, x, y, st);
+    if (isPositionSource(x, source.vertex)) {
+        // Endpoint position perturbation: a tangential Gaussian offset of the light or aperture node.
+        const PathVertex &v = x.vertex(st->moving);
+        Vec3 s, t;
+        coordinateSystem(v.ps.n, s, t);
+        const Vec2 offset = positionKernel(scene, v).sample(u);
+        if (!placeEndpoint(scene, v, v.position() + s * offset.x + t * offset.y, y.vertex(st->moving))) return false;
+        // The aperture takes no walk: a chain seen through the lens would have to land on the lens plane.
+        if (v.type == VertexType::SensorNode && std::abs(st->fixed - st->moving) > 1) return false;
+    } else {
+        const Vec3 mean = rayDirection(scene, x.vertex(source.vertex), x.vertex(source.vertex + source.dir));
+        const Vec3 d = kernel(scene, x, source.vertex, source.dir).sample(mean, u);
+        if (!aimSensor(scene, y.vertex(st->source), d) || !propagateChain(scene, sampler, x, y, *st, d)) return false;
+    }
+    if (std::abs(st->fixed - st->moving) == 1) return connectJunction(scene, y, std::min(st->moving, st->fixed));
+    return connectChain(scene, sampler, x, y, *st);
+}
+
+bool ManifoldPerturbation::propagateChain(const Scene &scene, Sampler &sampler, const MutablePath &x, MutablePath &y,
+                                          const Strategy &st, Vec3 d) const {
+    const int dir = st.moving > st.source ? 1 : -1;
+    const auto chain = manifoldChain(x, st.source, st.moving);
+    if (!chain) return false;
+    for (int cur = st.source;;) {
+        // Through the Dirac lobes up to the next glossy vertex or x_b.
+        const int next = nextSmooth(x, cur, st.moving);
+        if (!propagate(scene, sampler, walkMode(dir), x, y, cur, next, d)) return false;
+        if (next == st.moving) return true;
+        // A glossy vertex: scatter about the microfacet normal of x's offset (§6.6), as the walk's corrector
+        // does, from the predecessor's position, so that y's offset is x's.
+        stats_.glossySpecular += 1;
+        const size_t i = static_cast<size_t>(std::abs(next - st.source));
+        const Vec3 &from = y.vertex(next - dir).position(), &at = y.vertex(next).position();
+        const auto traced = walk_.propagate({ManifoldVertex::fixedPosition(from), (*chain)[i], (*chain)[i + 1]}, from,
+                                            normalize(at - from), nullptr);
+        if (!traced) return false;
+        // The path's ray leaves from an offset origin (Scene::spawnRay): aim it at the point the exact ray hits.
+        d = rayDirectionTo(scene, y.vertex(next), (*traced)[2].p);
+        cur = next;
+    }
 }
 
 bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, const MutablePath &x, MutablePath &y,
                                         const Strategy &st) const {
-    // WalkManifold(x_f, ..., x_m -> x'_m): the fixed end plays x_1 (§6.4).
+    // WalkManifold(x_c, ..., x_b -> x'_b): the fixed end plays x_1 (§6.4).
     const int dir = st.moving > st.fixed ? 1 : -1;
     const PathVertex &moved = y.vertex(st.moving);
     const auto chain = manifoldChain(x, st.fixed, st.moving);
@@ -159,16 +365,25 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     if (!walked.converged()) return false;
     stats_.converged += 1;
 
-    // The path-space vertices of the new chain: traced from x_f through the walked chain's first vertex, each
-    // specular vertex keeping its Dirac lobe, which must land on x'_m.
+    // The path-space vertices of the new chain: traced from x_c towards each walked glossy vertex and x'_b in
+    // turn, each ideal specular vertex on the way keeping its Dirac lobe; every traced vertex must land where
+    // the walk put it.
     MutablePath traced = y;
-    PathVertex &fixed = traced.vertex(st.fixed);
-    const Vec3 d = rayDirectionTo(scene, fixed, walked.chain[1].p);
-    if (!aimSensor(scene, fixed, d) || !propagate(scene, sampler, walkMode(dir), x, traced, st.fixed, st.moving, d))
-        return false;
-    if ((traced.vertex(st.moving).position() - moved.position()).length() > kLandingTolerance * walk_.sceneScale())
-        return false;
-    y.vertex(st.fixed).ps.uv = fixed.ps.uv;
+    Vec3 d = rayDirectionTo(scene, traced.vertex(st.fixed), walked.chain[1].p);
+    if (!aimSensor(scene, traced.vertex(st.fixed), d)) return false;
+    for (int cur = st.fixed;;) {
+        const int next = nextSmooth(x, cur, st.moving);
+        const size_t i = static_cast<size_t>(std::abs(next - st.fixed));
+        if (!propagate(scene, sampler, walkMode(dir), x, traced, cur, next, d) ||
+            (traced.vertex(next).position() - walked.chain[i].p).length() >
+                kRayOffsets * scene.epsilonAt(walked.chain[i].p))
+            return false;
+        if (next == st.moving) break;
+        stats_.glossySpecular += 1;
+        d = rayDirectionTo(scene, traced.vertex(next), walked.chain[i + 1].p);
+        cur = next;
+    }
+    y.vertex(st.fixed).ps.uv = traced.vertex(st.fixed).ps.uv;
     for (int i = st.fixed + dir; i != st.moving; i += dir) y.vertex(i) = traced.vertex(i);
     for (int i = std::min(st.fixed, st.moving); i < std::max(st.fixed, st.moving); ++i) y.edge(i) = traced.edge(i);
 
@@ -179,8 +394,7 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     const WalkResult returned = walk_.walk(*back, *origin);
     stats_.reverseWalks += 1;
     const Vec3 &first = x.vertex(st.fixed + dir).position();
-    const double scale = (first - x.vertex(st.fixed).position()).length();
-    if (!returned.converged() || (returned.chain[1].p - first).length() > kReverseTolerance * scale) {
+    if (!returned.converged() || (returned.chain[1].p - first).length() > kRayOffsets * scene.epsilonAt(first)) {
         stats_.nonReversible += 1;
         return false;
     }
@@ -190,29 +404,59 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
 double ManifoldPerturbation::density(const Scene &scene, const PathView &x, const PathView &y,
                                      const MutationRecord &record) const {
     const int n = x.length();
-    if (record.source < 0 || y.length() != n) return 0.0;
+    if (record.moving < 0 || y.length() != n) return 0.0;
     const int source = record.source, fixed = source == record.l ? record.m : record.l;
-    const std::vector<Strategy> list = strategies(x);
-    const auto st = std::find_if(list.begin(), list.end(),
-                                 [&](const Strategy &s) { return s.source == source && s.fixed == fixed; });
-    if (st == list.end()) return 0.0;
+    const Strategy st{source, record.moving, fixed};
+    const int dir = fixed > source ? 1 : -1;
+    if ((st.moving - source) * dir <= 0 || (fixed - st.moving) * dir <= 0) return 0.0;
+    const std::vector<Source> list = sources(x);
+    if (std::none_of(list.begin(), list.end(), [&](const Source &s) { return s.vertex == source && s.dir == dir; }))
+        return 0.0;
     // y must have x's configuration over the range the move changed.
-    for (int i = std::min(source, fixed); i <= std::max(source, fixed); ++i)
+    for (int i = std::max(std::min(source, fixed), 0); i <= std::min(std::max(source, fixed), n - 1); ++i)
         if (isNonSpecular(x.vertex(i)) != isNonSpecular(y.vertex(i))) return 0.0;
-    const int dir = st->moving > source ? 1 : -1;
-    const TransportMode mode = walkMode(dir);
-    double density = kernel(scene, x, source, dir)
-                         .eval(rayDirection(scene, x.vertex(source), x.vertex(source + dir)),
-                               rayDirection(scene, y.vertex(source), y.vertex(source + dir))) /
-                     static_cast<double>(list.size());
-    density *= propagationJacobian(y, source, st->moving, mode);
-    if (mode == TransportMode::Importance)
-        for (int i = source + 1; i < st->moving; ++i) density *= importanceToCanonical(scene, y, i);
-    if (std::abs(fixed - st->moving) > 1) {
-        const double rho = measureRatio(y, fixed, st->moving);
-        density = rho > 0 ? density / rho : 0.0;
+    const double strategy = classificationProbability(x, st) / static_cast<double>(list.size());
+    if (!(strategy > 0)) return 0.0;
+    // The second chain, found by the walk; a junction x_b x_c is a deterministic connection.
+    const double second = std::abs(fixed - st.moving) > 1 ? toCanonical(y, fixed, st.moving) : 1.0;
+    if (isPositionSource(x, source)) {
+        // The Gaussian offset's density per unit area of the (planar) light or aperture.
+        const PathVertex &v = x.vertex(st.moving), &w = y.vertex(st.moving);
+        const Vec3 delta = w.position() - v.position();
+        if (w.type != v.type || w.its.shape != v.its.shape ||
+            std::abs(dot(delta, v.ps.n)) > offPlaneTolerance(scene, w.position()))
+            return 0.0;
+        Vec3 s, t;
+        coordinateSystem(v.ps.n, s, t);
+        const double j = offsetFactor(y, st);
+        return j > 0 ? strategy * positionKernel(scene, v).eval(Vec2(dot(delta, s), dot(delta, t))) * second / j : 0.0;
     }
-    return density;
+    // T_M: the vMF density of the new direction per projected solid angle at x_a, times G through the first
+    // chain (seen from x_a) per unit area at x'_b.
+    const double lobe = kernel(scene, x, source, dir)
+                            .eval(rayDirection(scene, x.vertex(source), x.vertex(source + dir)),
+                                  rayDirection(scene, y.vertex(source), y.vertex(source + dir)));
+    // The first chain: x'_b's canonical density per solid angle at x_a.
+    double first;
+    if (nextSmooth(y, source, st.moving) == st.moving) {
+        // Ideal specular: the traced pseudo-measure itself, converted where the emitter walk traced it.
+        first = propagationJacobian(y, source, st.moving, walkMode(dir));
+        if (dir > 0)
+            for (int i = source + 1; i < st.moving; ++i) first *= importanceToCanonical(scene, y, i);
+    } else {
+        // Through glossy vertices: G_o / |cos_a| on the offset manifold, to the canonical measure.
+        const auto chain = manifoldChain(y, source, st.moving);
+        const std::optional<double> g = chain ? generalizedGeometry(*chain) : std::nullopt;
+        if (!g) return 0.0;
+        // The cosine at x_a in G's convention (points and medium vertices have none).
+        const ManifoldVertex &a = (*chain)[0];
+        const double cosine =
+            a.type == ManifoldVertexType::Surface ? absDot(a.ng, normalize((*chain)[1].p - a.p)) : 1.0;
+        first = cosine > 0 ? *g / cosine * toCanonical(y, source, st.moving) : 0.0;
+    }
+    // The offset Jacobian at y (1 without glossy chain vertices).
+    const double j = offsetFactor(y, st);
+    return j > 0 ? strategy * lobe * first * second / j : 0.0;
 }
 
 void ManifoldPerturbation::addCounters(ChainCounters &counters) const {
@@ -224,6 +468,7 @@ void ManifoldPerturbation::addCounters(ChainCounters &counters) const {
     max.value = std::max(max.value, stats_.maxChainVertices);
     counter(counters, "manifoldReverseWalks").value += stats_.reverseWalks;
     counter(counters, "manifoldNonReversible").value += stats_.nonReversible;
+    counter(counters, "manifoldGlossySpecular").value += stats_.glossySpecular;
 }
 
 }  // namespace pf

@@ -71,10 +71,14 @@ const char *mutationName(MutationType type);
 struct MutationRecord {
     int l = 0, m = 0, added = 0;
     // Perturbations that can run either way over x_l .. x_m (the manifold perturbation): the vertex whose
-    // direction was perturbed, l or m; -1 for the others.
+    // direction was perturbed, l or m, or the supernode (-1 or n) whose endpoint node's position was offset
+    // (the endpoint position perturbation, §6.5); unused by the others.
     int source = -1;
+    // The manifold perturbation: the vertex that moved freely (x_b of ALGORITHMS.md §6.5), which its random
+    // classification of glossy vertices chose (§6.6); -1 for the other mutations.
+    int moving = -1;
     // The same move seen from y back to x.
-    MutationRecord reverse() const { return {l, l + added + 1, m - l - 1, source}; }
+    MutationRecord reverse() const { return {l, l + added + 1, m - l - 1, source, moving}; }
 };
 
 class Mutation {
