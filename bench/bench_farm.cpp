@@ -1,7 +1,8 @@
 // Farm overhead and master cost per task, with real processes on loopback. Prints figures; never
 // passes or fails on time.
 //
-//   bench_farm [SCENE] [--res N] [--spp N]     (default: scenes/cornell-box/scene.xml at 256x256, 64 spp)
+//   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
+//   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res)
 //
 // 1. The same job rendered embedded (`pathfarm render --threads 2`) and by a farm of one local worker
 //    with 2 threads: samples/s of each and their ratio (farm time runs from the first lease to the
@@ -10,17 +11,29 @@
 //    (gRPC, validation, storing, merging, checkpoints, leases), the decode + merge time of one result
 //    measured in-process, and the bytes of a result on the wire.
 // 3. From these, how many 8-core workers one master can keep busy at this task size.
+// 4. The master with many workers: a fresh master, and N fake workers in this process, each
+//    with its own connection, that register, lease, heartbeat and return results through the real gRPC
+//    API as fast as the master hands out tasks. A result is a real encoded film block of the task's
+//    sample count (rendered once per count, so the image is not the job's: this part measures cost,
+//    part 1 checks bits). Printed: the master's CPU per idle worker and second (no job), then under a
+//    saturating task rate its CPU per task, the tasks per second it sustains, the bytes per task on the
+//    wire, and the 8-core workers that implies (their task time from part 1).
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <regex>
 #include <sstream>
+#include <thread>
 
 #include "farm/block_codec.h"
 #include "farm/harness.h"
+#include "farm/hash.h"
 #include "farm/job_setup.h"
 #include "farm/rpc.h"
 #include "image/bitmap.h"
@@ -60,21 +73,191 @@ std::string resizedCopy(const std::string &scene, int res, const std::string &di
 
 double metadataSeconds(const std::string &exr) { return std::stod(readEXR(exr).metadata.at("pathfarm.renderSeconds")); }
 
-}  // namespace
+namespace v1 = pathfarm::v1;
 
-int main(int argc, char **argv) {
-    std::string scene = std::string(PATHFARM_SOURCE_DIR) + "/scenes/cornell-box/scene.xml";
-    int res = 256, spp = 64;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--res" && i + 1 < argc) {
-            res = std::stoi(argv[++i]);
-        } else if (a == "--spp" && i + 1 < argc) {
-            spp = std::stoi(argv[++i]);
-        } else {
-            scene = a;
+// An encoded film block per task sample count of a job of `spp` samples per pixel. Blocks of more
+// than 16 samples are rendered with 16 (the master does not look at the values, and the size of a
+// compressed block hardly depends on the sample count), so that the setup takes seconds.
+std::map<int64_t, std::string> resultsBySampleCount(const std::string &scene, int64_t spp) {
+    auto loaded = loadScene(scene);
+    const auto integrator = makeIntegrator(*loaded, "", {});
+    std::map<int64_t, std::string> out;
+    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first)) {
+        const int64_t count = imageTaskSize(spp, first);
+        if (!out.count(count))
+            out[count] = farm::encodeBlock(runImageTask(*loaded, dynamic_cast<const SamplingIntegrator &>(*integrator),
+                                                        1, ImageTask{0, std::min<int64_t>(count, 16)}, 2)
+                                               .block);
+    }
+    return out;
+}
+
+// A worker that returns precomputed results over its own connection, as fast as the master leases.
+class FakeWorker {
+public:
+    FakeWorker(const std::string &address, const std::string &token, const std::map<int64_t, std::string> &results,
+               int64_t pixels)
+        : token_(token), results_(results), pixels_(pixels) {
+        grpc::ChannelArguments args;
+        args.SetMaxReceiveMessageSize(64 << 20);
+        args.SetMaxSendMessageSize(64 << 20);
+        // A connection of its own, as a worker on another host has (channels otherwise share one).
+        args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+        stub_ =
+            v1::WorkerService::NewStub(grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args));
+        v1::RegisterRequest req;
+        req.set_name("fake");
+        v1::RegisterReply reply;
+        check(stub_->Register(context().get(), req, &reply), "Register");
+        id_ = reply.worker_id();
+        heartbeat_ = std::chrono::milliseconds(reply.heartbeat_ms());
+        bytes_ += req.ByteSizeLong() + reply.ByteSizeLong();
+    }
+
+    // Leases and completes tasks until the master has none left and `done` is set.
+    void run(const std::atomic<bool> &done) {
+        auto lastBeat = std::chrono::steady_clock::now();
+        for (;;) {
+            v1::LeaseRequest req;
+            req.set_worker_id(id_);
+            req.set_wait_ms(2000);  // as pathfarm-worker long-polls
+            v1::LeaseReply reply;
+            check(stub_->LeaseTask(context().get(), req, &reply), "LeaseTask");
+            bytes_ += req.ByteSizeLong() + reply.ByteSizeLong();
+            if (reply.has_task()) {
+                complete(reply.task());
+                ++tasks_;
+            } else if (done) {
+                return;
+            }
+            if (std::chrono::steady_clock::now() - lastBeat >= heartbeat_) {
+                v1::HeartbeatRequest beat;
+                beat.set_worker_id(id_);
+                v1::HeartbeatReply beatReply;
+                check(stub_->Heartbeat(context().get(), beat, &beatReply), "Heartbeat");
+                bytes_ += beat.ByteSizeLong() + beatReply.ByteSizeLong();
+                lastBeat = std::chrono::steady_clock::now();
+            }
         }
     }
+    int64_t tasks() const { return tasks_; }
+    uint64_t bytes() const { return bytes_; }
+
+private:
+    void complete(const v1::TaskSpec &task) {
+        const std::string &payload = results_.at(task.image().sample_count());
+        v1::CompleteReply reply;
+        const auto ctx = context();
+        auto writer = stub_->CompleteTask(ctx.get(), &reply);
+        v1::ResultChunk header;
+        v1::ResultHeader *h = header.mutable_header();
+        h->set_worker_id(id_);
+        h->set_attempt_id(task.attempt_id());
+        h->mutable_stats()->set_samples(static_cast<uint64_t>(task.image().sample_count() * pixels_));
+        h->mutable_stats()->set_seconds(1e-3);
+        h->set_payload_size(payload.size());
+        h->set_payload_hash(farm::hashHex64(payload));
+        v1::ResultChunk data;
+        data.set_data(payload);
+        if (!writer->Write(header) || !writer->Write(data)) std::fprintf(stderr, "fake worker: write failed\n");
+        writer->WritesDone();
+        check(writer->Finish(), "CompleteTask");
+        if (!reply.accepted()) std::fprintf(stderr, "fake worker: result ignored: %s\n", reply.reason().c_str());
+        bytes_ += header.ByteSizeLong() + data.ByteSizeLong() + reply.ByteSizeLong();
+    }
+    std::unique_ptr<grpc::ClientContext> context() const {
+        auto ctx = std::make_unique<grpc::ClientContext>();
+        farm::setBearer(*ctx, token_);
+        ctx->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+        return ctx;
+    }
+    static void check(const grpc::Status &s, const char *call) {
+        if (!s.ok()) throw std::runtime_error(std::string("fake worker: ") + call + ": " + s.error_message());
+    }
+
+    std::string token_;
+    const std::map<int64_t, std::string> &results_;
+    int64_t pixels_;
+    std::unique_ptr<v1::WorkerService::Stub> stub_;
+    std::string id_;
+    std::chrono::milliseconds heartbeat_{3000};
+    int64_t tasks_ = 0;
+    uint64_t bytes_ = 0;
+};
+
+// Part 4: the master's cost per task under `workers` fake workers; with the time an 8-core worker takes
+// per pixel sample (0: unknown), the workers of 8 cores that one master keeps busy.
+void saturate(const std::string &scene, int res, int workers, int64_t tasks, double sampleSeconds8) {
+    test::farm::Farm farm("bench-saturate");
+    const std::string copy = resizedCopy(scene, res, farm.dir() + "/scene");
+    int64_t spp = 0;
+    for (int64_t n = 0; n < tasks; ++n) spp += imageTaskSize(std::numeric_limits<int64_t>::max(), spp);
+    const auto results = resultsBySampleCount(copy, spp);
+    test::farm::Process &master = farm.startMaster({"--max-spp", std::to_string(spp)});
+    std::vector<std::unique_ptr<FakeWorker>> fakes;
+    for (int i = 0; i < workers; ++i)
+        fakes.push_back(std::make_unique<FakeWorker>(farm.address(), farm.workerToken(), results, int64_t(res) * res));
+    std::atomic<bool> done{false};
+    std::vector<std::thread> threads;
+    for (auto &f : fakes)
+        threads.emplace_back([&, w = f.get()] {
+            try {
+                w->run(done);
+            } catch (const std::exception &e) {
+                std::fprintf(stderr, "%s\n%s\n", e.what(), master.log().c_str());
+                std::exit(1);
+            }
+        });
+    // What workers cost the master while there is no work: long-polls and heartbeats.
+    const double idleCpu0 = cpuSeconds(master.pid());
+    constexpr int kIdleSeconds = 6;
+    std::this_thread::sleep_for(std::chrono::seconds(kIdleSeconds));
+    const double idlePerWorker = (cpuSeconds(master.pid()) - idleCpu0) / kIdleSeconds / workers;
+    std::printf(
+        "idle: %d fake workers polling: %.3f ms of master CPU per second per worker (500 workers: %.0f%% of "
+        "a core)\n",
+        workers, 1e3 * idlePerWorker, 100 * 500 * idlePerWorker);
+    // The master's CPU from submission (after its validation load of the scene) to the final image.
+    const auto [scode, sout] = farm.cli("submit " + copy + " --spp " + std::to_string(spp) + " --seed 1");
+    const int64_t id = test::farm::jobIdFrom(sout);
+    const double cpu0 = cpuSeconds(master.pid());
+    const auto t0 = std::chrono::steady_clock::now();
+    const v1::Job job = farm.waitForJob(id, std::chrono::seconds(3600));
+    const double cpu = cpuSeconds(master.pid()) - cpu0;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    done = true;
+    for (std::thread &t : threads) t.join();
+    if (scode != 0 || job.state() != v1::JOB_DONE) {
+        std::fprintf(stderr, "saturation job failed: %s\n%s\n", sout.c_str(), master.log().c_str());
+        std::exit(1);
+    }
+    uint64_t bytes = 0;
+    for (const auto &f : fakes) bytes += f->bytes();
+    const double n = static_cast<double>(job.tasks().merged());
+    std::printf("saturation: %d fake workers, %lld tasks of %dx%d (%lld spp) in %.2f s\n", workers,
+                static_cast<long long>(job.tasks().merged()), res, res, static_cast<long long>(spp), wall);
+    std::printf("  master CPU:                %8.3f ms per task\n", 1e3 * cpu / n);
+    std::printf("  tasks per second:          %8.1f  (master CPU %.0f%% of one core; the machine may be shared)\n",
+                n / wall, 100 * cpu / wall);
+    std::printf("  tasks per CPU-second:      %8.1f  (what one master core sustains)\n", n / cpu);
+    std::printf("  bytes per task:            %8.0f  (protobuf messages both ways, heartbeats included)\n",
+                static_cast<double>(bytes) / n);
+    if (sampleSeconds8 <= 0) return;
+    // This job's tasks are mostly of the largest size (render/image_task.h); a job as short as part 1's
+    // has only small ones.
+    const double pixels = static_cast<double>(res) * res, cpuPerTask = cpu / n;
+    const double meanTask = sampleSeconds8 * pixels * static_cast<double>(spp) / n;
+    const double smallest = sampleSeconds8 * pixels * static_cast<double>(imageTaskSize(spp, 0));
+    const double largest = sampleSeconds8 * pixels * static_cast<double>(results.rbegin()->first);
+    std::printf(
+        "  8-core workers per master:  %7.0f at this job's mean task (%.3f s on 8 cores), %.0f at the\n"
+        "                              smallest task (%.3f s), %.0f at the largest (%.3f s); goal >= 500\n",
+        meanTask / cpuPerTask, meanTask, smallest / cpuPerTask, smallest, largest / cpuPerTask, largest);
+}
+
+// Parts 1-3: prints the master's cost per task over the whole job; returns the time an 8-core worker
+// takes per pixel sample (a quarter of the 2-thread farm's).
+double realFarm(const std::string &scene, int res, int spp) {
     test::farm::Farm farm("bench");
     const std::string copy = resizedCopy(scene, res, farm.dir() + "/scene");
     const std::string spec = " --spp " + std::to_string(spp) + " --seed 1";
@@ -89,7 +272,7 @@ int main(int argc, char **argv) {
         const auto [code, out] = farm.cli("render " + copy + " -q --threads 2" + spec + " -o " + embedded);
         if (code != 0) {
             std::fprintf(stderr, "embedded render failed: %s\n", out.c_str());
-            return 1;
+            std::exit(1);
         }
         embeddedSeconds = std::min(embeddedSeconds, metadataSeconds(embedded));
     }
@@ -107,7 +290,7 @@ int main(int argc, char **argv) {
         if (scode != 0 || wcode != 0 || fcode != 0) {
             std::fprintf(stderr, "farm job failed: %s%s%s\n%s\n", sout.c_str(), wout.c_str(), fout.c_str(),
                          master.log().c_str());
-            return 1;
+            std::exit(1);
         }
         if (metadataSeconds(farmed) < farmSeconds) {
             farmSeconds = metadataSeconds(farmed);
@@ -159,5 +342,39 @@ int main(int argc, char **argv) {
     std::printf("8-core workers per master:   %8.0f  (by master CPU; %0.f by decode + merge alone; goal >= 500)\n",
                 taskSeconds8 / cpuPerTask, taskSeconds8 / mergeSeconds);
     std::printf("8-core workers per 10 Gbit/s: %7.0f  (by result bytes)\n", taskSeconds8 * 1.25e9 / bytes);
+    return taskSeconds8 / (samples / static_cast<double>(tasks));
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    std::string scene = std::string(PATHFARM_SOURCE_DIR) + "/scenes/cornell-box/scene.xml";
+    int res = 256, spp = 64, fakeWorkers = 32, fakeRes = 0;  // 0: --res
+    int64_t fakeTasks = 400;
+    bool fakeOnly = false;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const bool value = i + 1 < argc;
+        if (a == "--res" && value) {
+            res = std::stoi(argv[++i]);
+        } else if (a == "--spp" && value) {
+            spp = std::stoi(argv[++i]);
+        } else if (a == "--fake-workers" && value) {
+            fakeWorkers = std::stoi(argv[++i]);
+        } else if (a == "--fake-tasks" && value) {
+            fakeTasks = std::stoll(argv[++i]);
+        } else if (a == "--fake-res" && value) {
+            fakeRes = std::stoi(argv[++i]);
+        } else if (a == "--fake-only") {
+            fakeOnly = true;
+        } else if (a.rfind("--", 0) == 0) {
+            std::fprintf(stderr, "bench_farm: unknown option %s\n", a.c_str());
+            return 2;
+        } else {
+            scene = a;
+        }
+    }
+    const double sampleSeconds8 = fakeOnly ? 0 : realFarm(scene, res, spp);
+    saturate(scene, fakeRes > 0 ? fakeRes : res, fakeWorkers, fakeTasks, sampleSeconds8);
     return 0;
 }

@@ -24,14 +24,15 @@ namespace v1 = pathfarm::v1;
 
 namespace {
 
+// A Markov-chain job's budget is in mutations per pixel, an image job's in samples per pixel.
 std::string progressLine(const v1::Job &j) {
     char line[256];
     std::snprintf(line, sizeof line,
-                  "job %" PRId64 " %s %5.1f%%: %" PRId64 " spp, %" PRId64 "/%s tasks merged, %" PRId64
-                  " leased, %.1f s",
+                  "job %" PRId64 " %s %5.1f%%: %" PRId64 " %s, %" PRId64 "/%s tasks merged, %" PRId64 " leased, %.1f s",
                   j.id(), farm::stateName(j.state()).c_str(), 100.0 * j.progress(), j.samples_per_pixel(),
-                  j.tasks().merged(), j.tasks().total() > 0 ? std::to_string(j.tasks().total()).c_str() : "?",
-                  j.tasks().leased(), j.render_seconds());
+                  j.has_chain() ? "mutations/pixel" : "spp", j.tasks().merged(),
+                  j.tasks().total() > 0 ? std::to_string(j.tasks().total()).c_str() : "?", j.tasks().leased(),
+                  j.render_seconds());
     return line;
 }
 

@@ -63,7 +63,7 @@ constexpr const char *kBody = R"html(</style></head>
 <tbody></tbody></table></section>
 <section><h2>Workers</h2>
 <table id="workers"><thead><tr><th>worker</th><th>host</th><th>state</th><th class="num">threads/cores</th><th class="num">leases</th>
-<th class="num">tasks done</th><th class="num">failed</th><th class="num">samples/s</th><th class="num">last seen</th><th>version</th></tr></thead>
+<th class="num">tasks done</th><th class="num">failed</th><th class="num">rate</th><th class="num">last seen</th><th>version</th></tr></thead>
 <tbody></tbody></table></section>
 </main>
 <aside id="preview"><div class="frame"><img alt="live preview"><span class="placeholder">no image yet</span></div>
@@ -113,6 +113,16 @@ function acceptance(j) {
     .map(c => c.name + ' ' + (100 * num(c.accepted) / num(c.proposed)).toFixed(1) + '%').join(' · ') };
 }
 function samplesCell(j) { return j.chain ? si(num(j.chain.mutations)) + ' mut' : num(j.samples_per_pixel) + ' spp'; }
+// A chain job's seeding and direct component, in pixel samples (its chains are in mutations).
+function chainSamples(j) {
+  return j.chain ? ' · seeding ' + si(num(j.chain.seeding_samples)) + ' spl · direct ' +
+    si(num(j.chain.direct_samples)) + ' spl' : '';
+}
+// A worker's rates in their units: pixel samples (image and seeding tasks), mutations (chain tasks).
+function workerRate(w) {
+  const m = num(w.mutations_per_second);
+  return si(num(w.samples_per_second)) + ' spl/s' + (m > 0 ? ' · ' + si(m) + ' mut/s' : '');
+}
 // A chain job's phase beside its state: its image only exists once the chains run.
 function stateCell(j) {
   const cell = el('span');
@@ -132,7 +142,7 @@ function showPreview(j) {
   const box = document.getElementById('preview');
   const acc = acceptance(j);
   box.querySelector('figcaption').textContent = 'Job ' + j.id + ' · ' + short(j.state) + ' · ' + j.width + '×' +
-    j.height + ' · ' + samplesCell(j) + ' · ' + clock(num(j.render_seconds));
+    j.height + ' · ' + samplesCell(j) + chainSamples(j) + ' · ' + clock(num(j.render_seconds));
   box.querySelector('.acceptance').textContent = acc.types ? 'acceptance: ' + acc.types : '';
   const key = j.id + '/' + j.tasks.merged + '/' + j.state;
   if (seeding(j)) {
@@ -185,7 +195,7 @@ async function refresh() {
     for (const w of workers)
       wbody.appendChild(numeric(row([w.name || w.id, (w.peer || '').replace(/^ipv[46]:/, ''), badge(w.state),
         w.threads + '/' + w.cores, (w.attempt_ids || []).length, num(w.tasks_completed), num(w.tasks_failed),
-        si(num(w.samples_per_second)), ((now - num(w.last_seen_unix_ms)) / 1000).toFixed(0) + ' s ago', w.version]),
+        workerRate(w), ((now - num(w.last_seen_unix_ms)) / 1000).toFixed(0) + ' s ago', w.version]),
         [3, 4, 5, 6, 7, 8]));
     if (!workers.length) wbody.appendChild(row([el('span', 'empty', 'no workers registered')]));
 

@@ -159,7 +159,11 @@ struct Master::JobFilm {
     // merged again after a restart).
     std::vector<std::string> mergedSinceCheckpoint;
     std::string checkpointFile;
-    Clock::time_point lastCheckpoint = Clock::now(), lastPreview;
+    Clock::time_point lastCheckpoint = Clock::now();
+    // The last developed image, of tasks [0, previewMerged).
+    std::shared_ptr<const Bitmap> preview;
+    int64_t previewMerged = 0;
+    Clock::time_point lastPreview;
     Clock::duration checkpointCost{};  // of the last checkpoint
 };
 
@@ -180,8 +184,7 @@ struct Master::JobRuntime {
     int64_t taskCount = 0;
     int64_t failedAttempts = 0, expiredAttempts = 0;
     std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task
-    std::shared_ptr<const Bitmap> preview;
-    bool filmOpen = false;  // the film still holds memory or result files to release once the job ends
+    bool filmOpen = false;                   // the film still holds memory or result files to release once the job ends
     JobFilm film;
 };
 
@@ -190,8 +193,9 @@ struct Master::WorkerRuntime {
     Clock::time_point lastSeen;
     bool draining = false;
     std::set<int64_t> attempts;
-    double renderSeconds = 0;
-    uint64_t samples = 0;
+    // Completed tasks in their two units: pixel samples (image and seeding tasks), mutations (chains).
+    double renderSeconds = 0, mutationSeconds = 0;
+    uint64_t samples = 0, mutations = 0;
 };
 
 Master::Master(MasterConfig config)
@@ -286,6 +290,7 @@ void Master::openFilm(JobRuntime &j, Loaded loaded) {
     if (stats->phase() == v1::CHAIN_PHASE_UNSPECIFIED) stats->set_phase(v1::CHAIN_PHASE_SEEDING);
     stats->set_seeding_tasks(job.seedingTaskCount());
     stats->set_direct_tasks(job.directTaskCount());
+    stats->set_seeding_samples_per_pixel(j.seedingSpp);
     f.chain = std::move(state);
     j.filmOpen = true;
 }
@@ -491,10 +496,23 @@ uint64_t Master::waitForChange(uint64_t seen, std::chrono::milliseconds timeout)
     return changes_;
 }
 
-std::shared_ptr<const Bitmap> Master::preview(int64_t id) const {
-    const std::lock_guard<std::mutex> lock(mu_);
-    const auto it = jobs_.find(id);
-    return it == jobs_.end() ? nullptr : it->second->preview;
+std::shared_ptr<const Bitmap> Master::preview(int64_t id) {
+    JobRuntime *j = nullptr;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        const auto it = jobs_.find(id);
+        if (it == jobs_.end()) return nullptr;
+        j = it->second.get();
+    }
+    JobFilm &f = j->film;
+    const std::lock_guard<std::mutex> filmLock(f.mu);
+    const auto now = Clock::now();
+    if (f.open() && f.merged > f.previewMerged && now - f.lastPreview >= std::chrono::milliseconds(250)) {
+        f.preview = std::make_shared<const Bitmap>(develop(*j));
+        f.previewMerged = f.merged;
+        f.lastPreview = now;
+    }
+    return f.preview;
 }
 
 std::optional<Master::ExrImage> Master::image(int64_t id) const {
@@ -539,6 +557,8 @@ std::vector<v1::WorkerInfo> Master::workers() const {
         info.clear_attempt_ids();
         for (const int64_t a : w->attempts) info.add_attempt_ids(a);
         if (w->renderSeconds > 0) info.set_samples_per_second(static_cast<double>(w->samples) / w->renderSeconds);
+        if (w->mutationSeconds > 0)
+            info.set_mutations_per_second(static_cast<double>(w->mutations) / w->mutationSeconds);
         out.push_back(std::move(info));
     }
     return out;
@@ -559,7 +579,8 @@ MasterMetrics Master::metrics() const {
     }
     m.workers = static_cast<int64_t>(workers_.size());
     for (const auto &[id, w] : workers_) m.workersAlive += w->info.state() != v1::WORKER_LOST;
-    const auto since = Clock::now() - std::chrono::minutes(1);
+    const int64_t since =
+        std::chrono::duration_cast<std::chrono::seconds>(Clock::now().time_since_epoch()).count() - 59;
     uint64_t recent = 0;
     for (const auto &[t, n] : recentSamples_)
         if (t >= since) recent += n;
@@ -900,8 +921,8 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
                 WorkerRuntime &wr = *w->second;
                 wr.attempts.erase(attempt);
                 wr.info.set_tasks_completed(wr.info.tasks_completed() + 1);
-                wr.renderSeconds += stats.seconds();
-                wr.samples += stats.samples();
+                (work.has_chain() ? wr.mutationSeconds : wr.renderSeconds) += stats.seconds();
+                (work.has_chain() ? wr.mutations : wr.samples) += stats.samples();
             }
             counters_.resultBytes += payload.size();
             counters_.mergeSeconds += decodeSeconds;
@@ -992,7 +1013,9 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     JobFilm &f = j.film;
     if (!f.open()) return;
     const int64_t before = f.merged;
-    uint64_t samples = 0, rays = 0;
+    // TaskStats.samples by the task's unit: pixel samples of image tasks (the direct component's
+    // apart), BDPT samples of seeding tasks, mutations of chain tasks.
+    uint64_t samples = 0, seedingSamples = 0, directSamples = 0, mutations = 0, rays = 0;
     double seconds = 0, loadSeconds = 0;
     for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
         const auto t0 = Clock::now();
@@ -1008,7 +1031,10 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
             return;
         }
         seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-        samples += it->second.stats.samples();
+        (work.has_seeding()                          ? seedingSamples
+         : work.has_chain()                          ? mutations
+         : work.has_image() && work.image().direct() ? directSamples
+                                                     : samples) += it->second.stats.samples();
         rays += it->second.stats.rays();
         loadSeconds += it->second.stats.scene_load_seconds();
         if (!work.has_seeding()) f.mergedSinceCheckpoint.push_back(it->second.file);
@@ -1018,33 +1044,35 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     if (f.merged == before) return;
     const auto now = Clock::now();
     const bool complete = j.total > 0 && f.merged == j.total;
-    std::shared_ptr<const Bitmap> preview;
-    if (complete || now - f.lastPreview > std::chrono::milliseconds(250)) {
-        preview = std::make_shared<const Bitmap>(develop(j));
-        f.lastPreview = now;
-    }
     {
         const std::lock_guard<std::mutex> lock(mu_);
         for (int64_t t = before; t < f.merged; ++t) j.tasks[static_cast<size_t>(t)].state = TaskRuntime::State::Merged;
         j.record.mutable_tasks()->set_merged(f.merged);
+        const uint64_t pixelSamples = samples + seedingSamples + directSamples;
         j.record.set_samples_per_pixel(f.spp);
-        j.record.set_samples(j.record.samples() + samples);
+        j.record.set_samples(j.record.samples() + pixelSamples);
         j.record.set_rays(j.record.rays() + rays);
         j.record.set_worker_scene_load_seconds(j.record.worker_scene_load_seconds() + loadSeconds);
         if (f.chain) {
             v1::ChainStats *stats = j.record.mutable_chain();
             const ChainImage &chains = f.chain->job->chains();
             stats->set_mutations(chains.mutations);
+            stats->set_mutations_per_pixel(f.chain->job->mutationsPerPixel());
+            stats->set_seeding_samples(stats->seeding_samples() + seedingSamples);
+            stats->set_direct_samples(stats->direct_samples() + directSamples);
+            stats->set_direct_samples_per_pixel(f.chain->job->directSamplesPerPixel());
             farm::toProto(chains.counts, *stats->mutable_mutation_counts());
             farm::toProto(chains.counters, *stats->mutable_counters());
             if (f.chain->job->seeded()) startChains(j);
         }
-        if (preview) j.preview = preview;
         counters_.resultsMerged += f.merged - before;
         counters_.mergeSeconds += seconds;
-        counters_.samplesMerged += samples;
-        recentSamples_.emplace_back(now, samples);
-        std::erase_if(recentSamples_, [&](const auto &e) { return e.first < now - std::chrono::minutes(1); });
+        counters_.samplesMerged += pixelSamples;
+        counters_.mutationsMerged += mutations;
+        const int64_t second = std::chrono::duration_cast<std::chrono::seconds>(now.time_since_epoch()).count();
+        if (recentSamples_.empty() || recentSamples_.back().first != second) recentSamples_.emplace_back(second, 0);
+        recentSamples_.back().second += pixelSamples;
+        while (recentSamples_.front().first < second - 59) recentSamples_.pop_front();
         touch();
     }
     // Checkpoints only shorten the replay after a restart (results stay on disk until then), so a large
@@ -1114,6 +1142,8 @@ void Master::finishIfComplete(JobRuntime &j) {
     if (spec.budget().has_time_seconds())
         image.metadata["pathfarm.timeBudget"] = std::to_string(spec.budget().time_seconds());
     writeEXR((fs::path(jobDir(j.record.id())) / "image.exr").string(), image);
+    f.preview = std::make_shared<const Bitmap>(std::move(image));
+    f.previewMerged = f.merged;
     const std::lock_guard<std::mutex> lock(mu_);
     j.record.set_finished_unix_ms(endMs);
     setState(j, v1::JOB_DONE);
@@ -1126,7 +1156,11 @@ void Master::closeFilm(JobRuntime &j) {
     // What a cancelled or failed job got to stays fetchable; a finished job has its final image already.
     const fs::path image = fs::path(jobDir(j.record.id())) / "image.exr";
     std::error_code ec;
-    if (f.merged > 0 && !fs::exists(image, ec)) writeEXR(image.string(), develop(j));
+    if (f.merged > 0 && !fs::exists(image, ec)) {
+        f.preview = std::make_shared<const Bitmap>(develop(j));
+        f.previewMerged = f.merged;
+        writeEXR(image.string(), *f.preview);
+    }
     f.block.reset();
     f.chain.reset();
     f.pending.clear();

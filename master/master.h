@@ -14,6 +14,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -57,11 +58,12 @@ struct MasterMetrics {
     std::map<std::string, int64_t> tasksByState;  // pending, leased, accepted, merged
     std::map<std::string, int64_t> jobsByState;
     int64_t workers = 0, workersAlive = 0;
-    uint64_t samplesMerged = 0;   // since the master started
-    double samplesPerSecond = 0;  // over the last minute
-    int64_t resultsMerged = 0;    // since the master started
-    double mergeSeconds = 0;      // decoding and merging those results
-    uint64_t resultBytes = 0;     // their payloads on the wire
+    uint64_t samplesMerged = 0;    // pixel samples (v1::Job.samples) since the master started
+    uint64_t mutationsMerged = 0;  // Markov-chain mutations since the master started
+    double samplesPerSecond = 0;   // pixel samples, over the last minute
+    int64_t resultsMerged = 0;     // since the master started
+    double mergeSeconds = 0;       // decoding and merging those results
+    uint64_t resultBytes = 0;      // their payloads on the wire
     int64_t lateResultsIgnored = 0;
     int64_t attemptsExpired = 0, attemptsFailed = 0;
 };
@@ -101,8 +103,10 @@ public:
         int64_t samplesPerPixel = 0;
     };
     std::optional<ExrImage> image(int64_t id) const;
-    // The latest developed image of a job (updated as results merge), or nullptr before the first merge.
-    std::shared_ptr<const Bitmap> preview(int64_t id) const;
+    // The job's image as merged so far, or nullptr before the first merge. Developed here, on request,
+    // at most four times a second and only when results merged since: a merge never develops the film
+    // for a preview nobody looks at.
+    std::shared_ptr<const Bitmap> preview(int64_t id);
     std::vector<pathfarm::v1::WorkerInfo> workers() const;
     MasterMetrics metrics() const;
 
@@ -185,7 +189,8 @@ private:
     std::map<int64_t, Lease> leases_;  // by attempt id
     std::map<std::string, std::unique_ptr<WorkerRuntime>> workers_;
     MasterMetrics counters_;
-    std::vector<std::pair<Clock::time_point, uint64_t>> recentSamples_;
+    // Samples merged per second (seconds since the steady clock's epoch), over the last minute.
+    std::deque<std::pair<int64_t, uint64_t>> recentSamples_;
 
     bool stopping_ = false;
     std::thread reaper_;

@@ -67,7 +67,7 @@ void farmWide(Exposition &e, const MasterMetrics &m, const std::vector<v1::Job> 
     e.family("pathfarm_worker_threads", "gauge", "Render threads of the workers that are not lost.");
     e.sample("pathfarm_worker_threads", {}, threads);
 
-    e.family("pathfarm_samples_per_second", "gauge", "Samples merged per second over the last minute.");
+    e.family("pathfarm_samples_per_second", "gauge", "Pixel samples merged per second over the last minute.");
     e.sample("pathfarm_samples_per_second", {}, m.samplesPerSecond);
     double mutationsPerSecond = 0;
     for (const v1::Job &j : jobs)
@@ -76,8 +76,12 @@ void farmWide(Exposition &e, const MasterMetrics &m, const std::vector<v1::Job> 
     e.family("pathfarm_mutations_per_second", "gauge",
              "Mutations merged per second of rendering, summed over the running Markov-chain jobs.");
     e.sample("pathfarm_mutations_per_second", {}, mutationsPerSecond);
-    e.family("pathfarm_samples_merged_total", "counter", "Samples merged since the master started.");
+    e.family("pathfarm_samples_merged_total", "counter",
+             "Pixel samples merged since the master started: image tasks, Markov-chain seeding and direct "
+             "components (never mutations).");
     e.sample("pathfarm_samples_merged_total", {}, static_cast<double>(m.samplesMerged));
+    e.family("pathfarm_mutations_merged_total", "counter", "Markov-chain mutations merged since the master started.");
+    e.sample("pathfarm_mutations_merged_total", {}, static_cast<double>(m.mutationsMerged));
 
     e.family("pathfarm_merge_seconds", "summary", "Time spent decoding and merging task results, per result.");
     e.sample("pathfarm_merge_seconds_sum", {}, m.mergeSeconds);
@@ -103,27 +107,41 @@ void perJob(Exposition &e, const std::vector<v1::Job> &jobs) {
                  1);
     e.family("pathfarm_job_progress", "gauge", "Fraction of the job done (0..1).");
     for (const v1::Job &j : jobs) e.sample("pathfarm_job_progress", jobLabel(j), j.progress());
-    e.family("pathfarm_job_samples_per_pixel", "gauge", "Samples per pixel merged into the job's image.");
+    // A Markov-chain job's budget is in mutations per pixel (pathfarm_job_mutations_per_pixel below).
+    e.family("pathfarm_job_samples_per_pixel", "gauge", "Samples per pixel merged into an image job's film.");
     for (const v1::Job &j : jobs)
-        e.sample("pathfarm_job_samples_per_pixel", jobLabel(j), static_cast<double>(j.samples_per_pixel()));
+        if (!j.has_chain())
+            e.sample("pathfarm_job_samples_per_pixel", jobLabel(j), static_cast<double>(j.samples_per_pixel()));
     e.family("pathfarm_job_render_seconds", "gauge", "Rendering time of the job: first lease to last merge.");
     for (const v1::Job &j : jobs) e.sample("pathfarm_job_render_seconds", jobLabel(j), j.render_seconds());
-    e.family("pathfarm_job_samples_per_second", "gauge", "Samples merged per second of the job's rendering time.");
+    e.family("pathfarm_job_samples_per_second", "gauge",
+             "Pixel samples merged per second of the job's rendering time.");
     for (const v1::Job &j : jobs)
         e.sample("pathfarm_job_samples_per_second", jobLabel(j),
                  perSecond(static_cast<double>(j.samples()), j.render_seconds()));
 
     // Markov-chain jobs: acceptance per mutation type is the statistic ALGORITHMS.md §2.1 (step size) and
     // §9.2 (seed ranges for MEPT/MEMLT) judge chains by; §8.3 asks a farm to report it with mutations/s.
-    e.family("pathfarm_job_mutations_total", "counter", "Mutations merged into a Markov-chain job.");
-    for (const v1::Job &j : jobs)
-        if (j.has_chain())
-            e.sample("pathfarm_job_mutations_total", jobLabel(j), static_cast<double>(j.chain().mutations()));
-    e.family("pathfarm_job_mutations_per_second", "gauge", "Mutations merged per second of the job's rendering time.");
-    for (const v1::Job &j : jobs)
-        if (j.has_chain())
-            e.sample("pathfarm_job_mutations_per_second", jobLabel(j),
-                     perSecond(static_cast<double>(j.chain().mutations()), j.render_seconds()));
+    // Each kind of a chain job's work in its own unit: seeding (BDPT samples), direct component (pixel
+    // samples), chains (mutations).
+    const auto byChainJob = [&](const char *name, const char *type, const char *help, auto value) {
+        e.family(name, type, help);
+        for (const v1::Job &j : jobs)
+            if (j.has_chain()) e.sample(name, jobLabel(j), static_cast<double>(value(j.chain(), j)));
+    };
+    byChainJob("pathfarm_job_seeding_samples_total", "counter", "BDPT samples of a Markov-chain job's merged seeding.",
+               [](const v1::ChainStats &c, const v1::Job &) { return c.seeding_samples(); });
+    byChainJob("pathfarm_job_direct_samples_total", "counter",
+               "Pixel samples of a Markov-chain job's merged direct component.",
+               [](const v1::ChainStats &c, const v1::Job &) { return c.direct_samples(); });
+    byChainJob("pathfarm_job_mutations_total", "counter", "Mutations merged into a Markov-chain job.",
+               [](const v1::ChainStats &c, const v1::Job &) { return c.mutations(); });
+    byChainJob("pathfarm_job_mutations_per_pixel", "gauge", "Mutations per pixel merged into a Markov-chain job.",
+               [](const v1::ChainStats &c, const v1::Job &) { return c.mutations_per_pixel(); });
+    byChainJob("pathfarm_job_mutations_per_second", "gauge", "Mutations merged per second of the job's rendering time.",
+               [](const v1::ChainStats &c, const v1::Job &j) {
+                   return perSecond(static_cast<double>(c.mutations()), j.render_seconds());
+               });
     // A type never proposed has no acceptance ratio (rather than a misleading 0).
     const auto byMutation = [&](const char *name, const char *type, const char *help, bool onlyProposed, auto value) {
         e.family(name, type, help);

@@ -218,12 +218,17 @@ Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<
         if (header.payload_size() > master_.maxPayloadBytes(header.attempt_id()))
             throw farm::FarmError("CompleteTask: a payload of " + std::to_string(header.payload_size()) +
                                   " bytes is larger than this task's film can be");
+        // A payload below the message limit comes in one chunk, which is taken over rather than copied.
         std::string payload;
-        payload.reserve(header.payload_size());
         while (reader->Read(&chunk)) {
             if (!chunk.has_data() || payload.size() + chunk.data().size() > header.payload_size())
                 throw farm::FarmError("CompleteTask: more data than the header announced");
-            payload += chunk.data();
+            if (payload.empty()) {
+                payload.swap(*chunk.mutable_data());
+                payload.reserve(header.payload_size());
+            } else {
+                payload += chunk.data();
+            }
         }
         if (payload.size() != header.payload_size())
             throw farm::FarmError("CompleteTask: the payload ended early (" + std::to_string(payload.size()) + " of " +

@@ -73,6 +73,16 @@ TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
         }
         EXPECT_GT(proposed, 0u);
         EXPECT_GT(accepted, 0u);
+        // Each kind of work in its unit: BDPT samples of the whole seeding, pixel samples of the
+        // direct component (directSamples=4), mutations of the chains; Job.samples are pixel samples only.
+        constexpr uint64_t kPixels = 80 * 80;
+        EXPECT_GT(chain.seeding_samples_per_pixel(), 0);
+        EXPECT_EQ(chain.seeding_samples(), kPixels * static_cast<uint64_t>(chain.seeding_samples_per_pixel()));
+        EXPECT_EQ(chain.direct_samples_per_pixel(), 4);
+        EXPECT_EQ(chain.direct_samples(), kPixels * 4);
+        EXPECT_EQ(job.samples(), chain.seeding_samples() + chain.direct_samples());
+        EXPECT_EQ(chain.mutations_per_pixel(), static_cast<int64_t>(chain.mutations() / kPixels));
+        EXPECT_EQ(job.samples_per_pixel(), chain.mutations_per_pixel());  // the budget's unit, as before
         EXPECT_GT(job.tasks().total(), 3);
         expectMergedOnce(job.id(), job.tasks().total());
     }

@@ -191,6 +191,19 @@ TEST_F(FarmHttp, ChainJobsReportMutationsAndAcceptance) {
     const std::map<std::string, double> m = parseExposition(get("/metrics").second);
     const std::string j = "{job=\"" + id + "\"}";
     EXPECT_EQ(m.at("pathfarm_job_mutations_total" + j), mutations);
+    EXPECT_EQ(m.at("pathfarm_mutations_merged_total"), mutations);
+    // Units apart: mutations per pixel instead of samples per pixel; the seeding's BDPT samples and the
+    // direct component's pixel samples are the job's (and the farm's) samples, never the mutations.
+    EXPECT_EQ(m.count("pathfarm_job_samples_per_pixel" + j), 0u);
+    EXPECT_EQ(m.at("pathfarm_job_mutations_per_pixel" + j),
+              std::stod(job["chain"]["mutations_per_pixel"].get<std::string>()));
+    const double seeding = std::stod(job["chain"]["seeding_samples"].get<std::string>());
+    const double direct = std::stod(job["chain"]["direct_samples"].get<std::string>());
+    EXPECT_GT(seeding, 0);
+    EXPECT_EQ(m.at("pathfarm_job_seeding_samples_total" + j), seeding);
+    EXPECT_EQ(m.at("pathfarm_job_direct_samples_total" + j), direct);
+    EXPECT_EQ(std::stod(job["samples"].get<std::string>()), seeding + direct);
+    EXPECT_EQ(m.at("pathfarm_samples_merged_total"), seeding + direct);
     EXPECT_NEAR(m.at("pathfarm_job_mutations_per_second" + j), mutations / job["render_seconds"].get<double>(),
                 1e-6 * m.at("pathfarm_job_mutations_per_second" + j));
     ASSERT_FALSE(job["chain"]["mutation_counts"].empty()) << job.dump();

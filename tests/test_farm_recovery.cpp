@@ -1,7 +1,10 @@
 // The master's failure rules with real processes: a master killed (SIGKILL) in the middle of a job
-// resumes it from its store with nothing lost and nothing merged twice, and a result that arrives after
-// its task was given to another attempt is ignored.
+// resumes it from its store with nothing lost and nothing merged twice, a result that arrives after
+// its task was given to another attempt is ignored, and a draining worker whose master is gone exits.
 #include <gtest/gtest.h>
+#include <signal.h>
+
+#include <thread>
 
 #include "farm/block_codec.h"
 #include "farm/harness.h"
@@ -146,6 +149,56 @@ TEST(FarmRecovery, LateResultOfASupersededAttemptIsIgnored) {
     ASSERT_EQ(fcode, 0) << fetched;
     EXPECT_TRUE(sameBits(ref, farm.dir() + "/farm.exr"));
     EXPECT_TRUE(farm.master().running());
+}
+
+// SIGTERM drains a worker: it finishes and delivers what it holds. When the master is gone, the worker
+// stops retrying once the master has been silent for a lease time (by then the tasks are another
+// worker's) and exits with code 1, saying what it abandoned, instead of retrying forever. The master is
+// killed (connections refused) or stopped (SIGSTOP: a partition, where calls hang rather than fail).
+void expectDrainingWorkerGivesUp(const std::string &name, int masterSignal) {
+    Farm farm(name);
+    // Tasks of 8 spp at 256 x 256 keep one thread busy for a while: the master goes mid-render.
+    const std::string scene = writeTestScene(farm.dir() + "/scene", 256, 8);
+    farm.startMaster({"--lease-ms", "2000", "--heartbeat-ms", "250"});
+    Process &worker = farm.startWorker(1);
+    const auto [code, output] = farm.cli("submit " + scene + " --spp 4096 --seed 3");
+    ASSERT_EQ(code, 0) << output;
+    // The second task: the bundle is cached and the scene loaded, so the worker is rendering.
+    const auto renders = [&] {
+        const std::string log = worker.log();
+        size_t n = 0;
+        for (size_t at = 0; (at = log.find("rendering samples", at)) != std::string::npos; ++at) ++n;
+        return n;
+    };
+    ASSERT_TRUE(waitUntil([&] { return renders() >= 2; }, 120s)) << worker.log();
+    farm.master().signal(masterSignal);
+    // The render ends and its upload starts: it fails at once against a dead master and hangs against
+    // a stopped one.
+    if (masterSignal == SIGKILL) {
+        ASSERT_TRUE(waitUntil([&] { return worker.log().find("retrying the upload") != std::string::npos; }, 120s))
+            << worker.log();
+    } else {
+        std::this_thread::sleep_for(3s);
+    }
+    const auto signalled = std::chrono::steady_clock::now();
+    worker.signal(SIGTERM);
+    const auto exitCode = worker.wait(60s);
+    ASSERT_TRUE(exitCode) << "the draining worker kept waiting for its master:\n" << worker.log();
+    // The render in hand (about a second), a lease time (2 s) without an answer, then at most one
+    // backoff step (5 s) or one heartbeat call (0.5 s) and one more call.
+    EXPECT_LT(std::chrono::steady_clock::now() - signalled, 20s) << worker.log();
+    EXPECT_EQ(*exitCode, 1) << worker.log();
+    EXPECT_NE(worker.log().find("result abandoned"), std::string::npos) << worker.log();
+    // The task rendering when the master went, and perhaps the one before it (uploads overlap renders).
+    EXPECT_NE(worker.log().find("drained without the master: "), std::string::npos) << worker.log();
+}
+
+TEST(FarmRecovery, DrainingWorkerExitsWhenItsMasterIsKilled) {
+    expectDrainingWorkerGivesUp("drain-master-killed", SIGKILL);
+}
+
+TEST(FarmRecovery, DrainingWorkerExitsWhenItsMasterIsSilent) {
+    expectDrainingWorkerGivesUp("drain-master-stopped", SIGSTOP);
 }
 
 }  // namespace

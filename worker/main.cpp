@@ -1,6 +1,7 @@
 // pathfarm-worker: renders tasks leased from a pathfarm master. SIGTERM (or SIGINT) drains: the task in
-// hand is finished and delivered, then the worker exits; a second signal exits at once (the master
-// re-leases the task when its lease runs out).
+// hand is finished and delivered, then the worker exits (code 1 when the master stayed silent for a
+// lease time and results were abandoned); a second signal exits at once (the master re-leases the task
+// when its lease runs out).
 #include <signal.h>
 #include <spdlog/spdlog.h>
 

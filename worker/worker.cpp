@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <random>
 #include <sstream>
@@ -53,6 +54,14 @@ std::unique_ptr<grpc::ClientContext> Worker::context(std::chrono::milliseconds t
     return ctx;
 }
 
+void Worker::heardFromMaster() { lastContact_ = std::chrono::steady_clock::now().time_since_epoch().count(); }
+
+bool Worker::masterGone() const {
+    const auto silent =
+        std::chrono::steady_clock::now().time_since_epoch() - std::chrono::steady_clock::duration(lastContact_.load());
+    return draining_ && silent > std::chrono::milliseconds(leaseMs_.load());
+}
+
 std::string Worker::workerId() const {
     const std::lock_guard<std::mutex> lock(mu_);
     return workerId_;
@@ -65,9 +74,9 @@ bool Worker::backoff(int &step) const {
     const auto until = std::chrono::steady_clock::now() +
                        std::chrono::milliseconds(std::uniform_int_distribution<int>(ms / 2, ms)(rng));
     // Sleeps in short steps so that a stop is noticed.
-    while (std::chrono::steady_clock::now() < until && !stopping_)
+    while (std::chrono::steady_clock::now() < until && !stopping_ && !masterGone())
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    return !stopping_;
+    return !stopping_ && !masterGone();
 }
 
 void Worker::registerWithMaster() {
@@ -83,6 +92,8 @@ void Worker::registerWithMaster() {
         v1::RegisterReply reply;
         const grpc::Status s = stub_->Register(context(std::chrono::seconds(10)).get(), req, &reply);
         if (s.ok()) {
+            heardFromMaster();
+            if (reply.lease_ms() > 0) leaseMs_ = reply.lease_ms();
             const std::lock_guard<std::mutex> lock(mu_);
             workerId_ = reply.worker_id();
             heartbeat_ = std::chrono::milliseconds(std::max<int64_t>(20, reply.heartbeat_ms()));
@@ -160,6 +171,13 @@ int Worker::run() {
     uploadThread_.join();
     for (std::thread &t : runners_) t.join();
     runners_.clear();
+    if (abandoned_ > 0) {
+        spdlog::error(
+            "worker={}: drained without the master: {} result(s) not delivered, as {} has not answered "
+            "for {} ms (a lease time; their tasks are another worker's now); exiting",
+            workerId(), abandoned_, cfg_.master, leaseMs_.load());
+        return 1;
+    }
     spdlog::info("worker={}: drained", workerId());
     return 0;
 }
@@ -181,6 +199,7 @@ std::optional<v1::TaskSpec> Worker::leaseTask() {
             const std::lock_guard<std::mutex> lock(mu_);
             leaseCall_ = nullptr;
         }
+        if (!retryable(s)) heardFromMaster();
         if (s.ok()) return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
         if (draining_) return std::nullopt;
         if (s.error_code() == grpc::StatusCode::NOT_FOUND) {
@@ -320,6 +339,7 @@ void Worker::fetchBundle(const std::string &hash) {
         }
         const grpc::Status s = reader->Finish();
         if (s.ok()) {
+            heardFromMaster();
             spdlog::info("bundle {}: cached", hash);
             return;
         }
@@ -336,18 +356,23 @@ void Worker::failTask(int64_t attempt, const std::string &error) {
         req.set_error(error);
         v1::FailTaskReply reply;
         const grpc::Status s = stub_->FailTask(context(std::chrono::seconds(10)).get(), req, &reply);
+        if (!retryable(s)) heardFromMaster();
         if (s.ok() || !retryable(s) || isLost(attempt) || !backoff(step)) break;
     }
     release(attempt);
 }
 
-void Worker::upload(const Result &r) {
+bool Worker::upload(const Result &r) {
     const std::string &payload = r.payload;
     const std::string hash = farm::hashHex64(payload);
     const size_t chunk = static_cast<size_t>(std::max(4096, cfg_.maxMessageBytes - 4096));
     for (int step = 0; !isLost(r.attempt);) {
         v1::CompleteReply reply;
         const auto ctx = context(std::chrono::minutes(10));
+        {
+            const std::lock_guard<std::mutex> lock(mu_);
+            uploadCall_ = ctx.get();
+        }
         auto writer = stub_->CompleteTask(ctx.get(), &reply);
         v1::ResultChunk c;
         auto *h = c.mutable_header();
@@ -367,6 +392,11 @@ void Worker::upload(const Result &r) {
         }
         if (open) writer->WritesDone();
         const grpc::Status s = writer->Finish();
+        {
+            const std::lock_guard<std::mutex> lock(mu_);
+            uploadCall_ = nullptr;
+        }
+        if (!retryable(s)) heardFromMaster();  // an answer, even a refusal
         if (s.ok()) {
             if (reply.accepted()) {
                 spdlog::info("attempt={} worker={}: result accepted ({} bytes, {:.2f} s)", r.attempt, workerId(),
@@ -374,16 +404,24 @@ void Worker::upload(const Result &r) {
             } else {
                 spdlog::warn("attempt={} worker={}: result ignored: {}", r.attempt, workerId(), reply.reason());
             }
-            return;
+            return true;
         }
         if (!retryable(s)) {
             spdlog::error("attempt={} worker={}: result refused: {}", r.attempt, workerId(), s.error_message());
-            return;
+            return true;
         }
         spdlog::warn("attempt={}: master unavailable ({}); retrying the upload", r.attempt, s.error_message());
-        if (!backoff(step)) return;
+        if (!backoff(step)) {
+            if (!masterGone()) return true;  // stopping
+            spdlog::error(
+                "attempt={} worker={}: draining, and the master {} has not answered for {} ms (a lease "
+                "time): result abandoned",
+                r.attempt, workerId(), cfg_.master, leaseMs_.load());
+            return false;
+        }
     }
     spdlog::warn("attempt={}: lease lost before the result was delivered", r.attempt);
+    return true;
 }
 
 void Worker::uploadLoop() {
@@ -396,9 +434,10 @@ void Worker::uploadLoop() {
         uploads_.pop_front();
         changed_.notify_all();
         lock.unlock();
-        upload(r);
+        const bool delivered = upload(r);
         release(r.attempt);
         lock.lock();
+        abandoned_ += !delivered;
         uploading_ = false;
         changed_.notify_all();
     }
@@ -418,6 +457,13 @@ void Worker::heartbeatLoop() {
         req.set_draining(draining_);
         v1::HeartbeatReply reply;
         const grpc::Status s = stub_->Heartbeat(context(period * 2).get(), req, &reply);
+        if (!retryable(s)) heardFromMaster();
+        if (masterGone()) {
+            // A silent master (a partition rather than a refused connection) must not hold a draining
+            // worker for an upload's whole deadline.
+            const std::lock_guard<std::mutex> lock(mu_);
+            if (uploadCall_) uploadCall_->TryCancel();
+        }
         if (s.error_code() == grpc::StatusCode::NOT_FOUND) {
             registerWithMaster();
         } else if (s.ok()) {

@@ -2,7 +2,9 @@
 // and chain tasks run one per thread (a chain is sequential), so the worker holds up to --threads of them
 // at once. Results stream back while the next tasks run. Leases are renewed by a heartbeat thread;
 // scenes are cached by bundle hash (on disk) and the last loaded scene is kept in memory. When the
-// master is away every call is retried with backoff, so a restarted master finds its workers again.
+// master is away every call is retried with backoff, so a restarted master finds its workers again;
+// a draining worker stops retrying once the master has not answered for a lease time (its tasks are
+// then another worker's) and exits, reporting the results it could not deliver.
 #pragma once
 #include <atomic>
 #include <condition_variable>
@@ -43,7 +45,8 @@ public:
     Worker(const Worker &) = delete;
     Worker &operator=(const Worker &) = delete;
 
-    // Works until drain() and the last upload finish. Returns the process exit code.
+    // Works until drain() and the last upload finish. Returns the process exit code: 0, or 1 when the
+    // worker drained without reaching the master and results were abandoned.
     int run();
     // Stops leasing; the task being rendered and the results being uploaded are finished first.
     void drain();
@@ -72,7 +75,9 @@ private:
     std::shared_ptr<const Prepared> prepare(const pathfarm::v1::TaskSpec &task);
     void fetchBundle(const std::string &hash);
     void failTask(int64_t attempt, const std::string &error);
-    void upload(const Result &r);
+    // Delivers a result; false when it was abandoned (lease lost, refused, or the master gone while
+    // draining).
+    bool upload(const Result &r);
     void heartbeatLoop();
     void uploadLoop();
 
@@ -80,10 +85,15 @@ private:
     void hold(int64_t attempt);
     void release(int64_t attempt);
     bool isLost(int64_t attempt) const;
-    // Sleeps the next backoff step (growing to a few seconds, with jitter); false when draining made
-    // further retries pointless.
+    // Sleeps the next backoff step (growing to a few seconds, with jitter); false when stopping, or when
+    // draining and the master is gone, made further retries pointless.
     bool backoff(int &step) const;
     std::unique_ptr<grpc::ClientContext> context(std::chrono::milliseconds timeout) const;
+    // The master answered a call.
+    void heardFromMaster();
+    // Draining, and the master has not answered for a lease time: by then it has expired this worker's
+    // leases and given their tasks to others, so retrying would only delay the exit.
+    bool masterGone() const;
 
     WorkerConfig cfg_;
     std::shared_ptr<grpc::Channel> channel_;
@@ -96,13 +106,18 @@ private:
     std::condition_variable changed_;
     std::string workerId_;
     std::chrono::milliseconds heartbeat_{3000};
+    std::atomic<int64_t> leaseMs_{10000};  // the master's lease time, from its registration reply
+    // When the master last answered (steady clock, nanoseconds since its epoch).
+    std::atomic<int64_t> lastContact_{std::chrono::steady_clock::now().time_since_epoch().count()};
+    int abandoned_ = 0;  // results not delivered
     std::set<int64_t> held_, lost_;
     std::deque<Result> uploads_;
     bool uploading_ = false;
     std::deque<pathfarm::v1::TaskSpec> queued_;  // single-threaded tasks waiting for a runner
     int running_ = 0;                            // single-threaded tasks running
     std::vector<std::thread> runners_;
-    grpc::ClientContext *leaseCall_ = nullptr;  // cancelled by drain()
+    grpc::ClientContext *leaseCall_ = nullptr;   // cancelled by drain()
+    grpc::ClientContext *uploadCall_ = nullptr;  // cancelled once draining and the master is gone
     std::atomic<bool> draining_{false}, stopping_{false};
     std::thread heartbeatThread_, uploadThread_;
 };
