@@ -223,7 +223,7 @@ INSTANTIATE_TEST_SUITE_P(
         BalanceCase{"pool", MutationType::Manifold}, BalanceCase{"pool-underwater", MutationType::Manifold},
         BalanceCase{"torus", MutationType::Manifold}, BalanceCase{"glossy-spheres", MutationType::Manifold},
         BalanceCase{"glossy-spheres-analytic", MutationType::Manifold},
-        BalanceCase{"veach-mis", MutationType::Manifold}),
+        BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold}),
     [](const ::testing::TestParamInfo<BalanceCase> &info) {
         std::string name = info.param.scene + "_" + mutationName(info.param.type);
         for (char &ch : name)
@@ -335,7 +335,7 @@ TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
     const MutationSet set = allMutations(*scene);
     const Mutation &mutation = set[static_cast<size_t>(c.type)];
     const std::vector<MutablePath> paths = bdptPaths(*scene, 400);
-    int checked = 0, positionMoves = 0;
+    int checked = 0, lightMoves = 0, apertureMoves = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
         const MutablePath &x = paths[i];
@@ -370,20 +370,26 @@ TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
                 const int fixed = record.source == record.l ? record.m : record.l;
                 strategy = manifold.classificationProbability(x, {record.source, record.moving, fixed}) /
                            static_cast<double>(manifold.sources(x).size());
-                // The endpoint position perturbation: the source is a supernode and x_b the light's node.
-                if (record.source < 0 || record.source >= x.length()) ++positionMoves;
+                // The endpoint position perturbation: the source is a supernode and x_b the light's or the
+                // aperture's node.
+                lightMoves += record.source < 0;
+                apertureMoves += record.source >= x.length();
             }
             relative = std::abs(mutation.density(*scene, x, y, record) / strategy / fd - 1);
         }
         worst = std::max(worst, relative);
         EXPECT_LT(relative, 2e-3) << "path " << i << ": density disagrees with the sampler's Jacobian";
     }
-    std::printf("%s %s: %d Jacobians (%d endpoint position moves), worst relative difference %.2g\n", c.scene.c_str(),
-                mutationName(c.type), checked, positionMoves, worst);
+    std::printf("%s %s: %d Jacobians (%d light and %d aperture position moves), worst relative difference %.2g\n",
+                c.scene.c_str(), mutationName(c.type), checked, lightMoves, apertureMoves, worst);
     EXPECT_GE(checked, 20) << "too few proposals checked";
-    // cornell-box's light is planar; veach-mis's are spheres, whose position moves always fail.
-    if (c.type == MutationType::Manifold && c.scene == "cornell-box") {
-        EXPECT_GE(positionMoves, 3) << "too few light position moves checked";
+    // cornell-box's light is planar (veach-mis's are spheres, whose position moves always fail); the thin
+    // lens variant adds aperture moves.
+    if (c.type == MutationType::Manifold && c.scene.rfind("cornell-box", 0) == 0) {
+        EXPECT_GE(lightMoves, 3) << "too few light position moves checked";
+    }
+    if (c.type == MutationType::Manifold && c.scene == "cornell-box-thinlens") {
+        EXPECT_GE(apertureMoves, 3) << "too few aperture position moves checked";
     }
 }
 
@@ -396,6 +402,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, DensityMatchesSampler,
                                            JacobianCase{"veach-mis", MutationType::Lens},
                                            JacobianCase{"veach-mis", MutationType::Caustic},
                                            JacobianCase{"cornell-box", MutationType::Manifold},
+                                           JacobianCase{"cornell-box-thinlens", MutationType::Manifold},
                                            JacobianCase{"veach-mis", MutationType::Manifold}),
                          [](const ::testing::TestParamInfo<JacobianCase> &info) {
                              std::string name = info.param.scene + "_" + mutationName(info.param.type);

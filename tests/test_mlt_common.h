@@ -58,13 +58,27 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
     const std::string dir =
         tempDir("mlt-scene-" + name + "-" + std::to_string(res) + "-" + std::to_string(sampleCount));
     std::string xml = name == "pool" ? poolScene("0, 4, 3") : poolScene("0.3, 0.8, 0.4");
-    // "<scene>-analytic": the scene with its sphere meshes replaced by analytic spheres (same geometry).
-    const std::string analyticSuffix = "-analytic";
-    const bool analytic = name.size() > analyticSuffix.size() &&
-                          name.compare(name.size() - analyticSuffix.size(), analyticSuffix.size(), analyticSuffix) == 0;
-    if (name.rfind("pool", 0) != 0) {
-        const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" /
-                             (analytic ? name.substr(0, name.size() - analyticSuffix.size()) : name);
+    // Variants of a shipped scene: "<scene>-analytic" has its sphere meshes replaced by analytic spheres (the
+    // same geometry), "<scene>-thinlens" its perspective camera by a thin lens (aperture radius 0.1, focused
+    // at 6, for the endpoint position perturbation on the aperture).
+    struct Variant {
+        std::string suffix, pattern, replacement;
+    };
+    const std::vector<Variant> variants = {
+        {"-analytic", R"(<shape type="obj">\s*<string name="filename" value="models/sphere.obj"\s*/>)",
+         R"(<shape type="sphere">)"},
+        {"-thinlens", R"(<sensor type="perspective"\s*>)",
+         R"(<sensor type="thinlens"><float name="apertureRadius" value="0.1"/><float name="focusDistance" value="6"/>)"}};
+    std::string base = name;
+    const Variant *variant = nullptr;
+    for (const Variant &v : variants)
+        if (base.size() > v.suffix.size() &&
+            base.compare(base.size() - v.suffix.size(), v.suffix.size(), v.suffix) == 0) {
+            base.resize(base.size() - v.suffix.size());
+            variant = &v;
+        }
+    if (base.rfind("pool", 0) != 0) {
+        const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" / base;
         for (const auto &entry : fs::directory_iterator(src))
             if (entry.path().filename() != "scene.xml")
                 fs::create_symlink(entry.path(), fs::path(dir) / entry.path().filename());
@@ -72,10 +86,7 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
         std::stringstream text;
         text << in.rdbuf();
         xml = std::regex_replace(text.str(), std::regex(R"(<rfilter type="[a-z]+"\s*/>)"), R"(<rfilter type="box"/>)");
-        if (analytic)
-            xml = std::regex_replace(
-                xml, std::regex(R"(<shape type="obj">\s*<string name="filename" value="models/sphere.obj"\s*/>)"),
-                R"(<shape type="sphere">)");
+        if (variant) xml = std::regex_replace(xml, std::regex(variant->pattern), variant->replacement);
     }
     xml = std::regex_replace(xml, std::regex(R"(<integer name="sampleCount" value="\d+"\s*/>)"),
                              "<integer name=\"sampleCount\" value=\"" + std::to_string(sampleCount) + "\"/>");
