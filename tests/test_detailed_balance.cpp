@@ -594,11 +594,7 @@ TEST_P(GlossyOffsetJacobian, MatchesFiniteDifferences) {
 // Meshes, whose charts are exact per triangle, and analytic spheres, whose glossy frame turns with the normal
 // (specular_constraint.h).
 INSTANTIATE_TEST_SUITE_P(Scenes, GlossyOffsetJacobian, ::testing::Values("glossy-spheres", "glossy-spheres-analytic"),
-                         [](const ::testing::TestParamInfo<std::string> &info) {
-                             std::string n = info.param;
-                             std::replace(n.begin(), n.end(), '-', '_');
-                             return n;
-                         });
+                         [](const ::testing::TestParamInfo<std::string> &info) { return gtestName(info.param); });
 
 // Detailed balance in its integral form on glossy-spheres, which sees the offset Jacobian and the classification
 // probabilities through the sampler itself. For states x ~ pi and proposals y ~ T(x -> .), accepted with

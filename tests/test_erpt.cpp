@@ -29,11 +29,7 @@ TEST_P(ERPTConvergence, AgreesWithBDPT) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ERPTConvergence, ::testing::Values("cornell-box", "veach-mis", "veach-bidir"),
-                         [](const auto &info) {
-                             std::string n = info.param;
-                             std::replace(n.begin(), n.end(), '-', '_');
-                             return n;
-                         });
+                         [](const auto &info) { return gtestName(info.param); });
 
 struct Case {
     std::string scene;
@@ -55,11 +51,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"cornell-box", MutationType::Lens}, Case{"cornell-box", MutationType::Caustic},
                       Case{"veach-bidir", MutationType::Caustic}, Case{"pool", MutationType::MultiChain},
                       Case{"pool-underwater", MutationType::Caustic}),
-    [](const auto &info) {
-        std::string n = info.param.scene + "_" + mutationName(info.param.type);
-        std::replace(n.begin(), n.end(), '-', '_');
-        return n;
-    });
+    [](const auto &info) { return gtestName(info.param.scene + "_" + mutationName(info.param.type)); });
 
 // §5.3, Cline's bookkeeping: a seed of weight w starts floor(nu + U) chains, nu = numChains w / W (capped at
 // maxChains), each of weight w / nu, so that its bursts carry w in expectation; on average numChains chains

@@ -34,16 +34,10 @@ Statistics meptStatistics(const std::string &glossyAngle) {
     auto scene = loadMLTTestScene("glossy-spheres", 16, 8);
     const auto integrator = makeTestIntegrator(
         *scene, "mept", {{"directSamples", "-1"}, {"chainLength", "50"}, {"manifoldGlossyAngle", glossyAngle}});
-    const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
-    const Normalizer normalizer = seedChains(*scene, chains, 3);
+    const ChainStatistics chains = chainStatistics(*scene, *integrator, 8);
     Statistics stats;
-    MutationCounts counts;
-    for (uint64_t k = 0; k < chains.chainTaskCount(*scene, 8); ++k) {
-        const ChainResult r = runChainTask(*scene, chains, 3, chains.chainTask(*scene, normalizer, 3, 8, k));
-        addCounters(stats.counters, r.counters);
-        addCounts(counts, r.counts);
-    }
-    for (const MutationCount &c : counts)
+    stats.counters = chains.counters;
+    for (const MutationCount &c : chains.counts)
         if (c.name == "manifold") stats.manifold = c;
     const double walks = stats.value("manifoldWalks");
     std::printf(

@@ -9,18 +9,6 @@
 namespace pf::test {
 namespace {
 
-ConvergenceSetup longSetup() {
-    ConvergenceSetup s;
-    s.res = 32;
-    s.seeds = 32;
-    s.referenceSpp = 128;
-    s.budget = 16;
-    s.sigmas = 5;
-    s.maxMedianError = 0.04;
-    s.maxImageError = 0.02;
-    return s;
-}
-
 struct DefaultsCase {
     std::string scene;
     bool separateDirect;
@@ -33,7 +21,7 @@ TEST_P(LongERPTConvergence, AgreesWithBDPT) {
     const DefaultsCase &c = GetParam();
     const std::vector<std::pair<std::string, std::string>> params = {{"directSamples", c.separateDirect ? "16" : "-1"},
                                                                      {"chainLength", "200"}};
-    expectConvergence(c.scene, "erpt", params, longSetup(), c.scene + " erpt");
+    expectConvergence(c.scene, "erpt", params, longConvergenceSetup(16), c.scene + " erpt");
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, LongERPTConvergence,
@@ -41,9 +29,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, LongERPTConvergence,
                                            DefaultsCase{"veach-mis", false}, DefaultsCase{"veach-mis", true},
                                            DefaultsCase{"veach-bidir", false}, DefaultsCase{"veach-bidir", true}),
                          [](const auto &info) {
-                             std::string n = info.param.scene + (info.param.separateDirect ? "_direct" : "_chains");
-                             std::replace(n.begin(), n.end(), '-', '_');
-                             return n;
+                             return gtestName(info.param.scene + (info.param.separateDirect ? "_direct" : "_chains"));
                          });
 
 struct Case {
@@ -54,7 +40,7 @@ struct Case {
 class LongSingleMutationBursts : public ::testing::TestWithParam<Case> {};
 
 TEST_P(LongSingleMutationBursts, AgreeWithBDPT) {
-    expectSingleMutationConvergence(GetParam().scene, GetParam().type, longSetup());
+    expectSingleMutationConvergence(GetParam().scene, GetParam().type, longConvergenceSetup(16));
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -67,11 +53,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"veach-bidir", MutationType::Lens}, Case{"veach-bidir", MutationType::Caustic},
                       Case{"pool", MutationType::Lens}, Case{"pool", MutationType::MultiChain},
                       Case{"pool-underwater", MutationType::Caustic}),
-    [](const auto &info) {
-        std::string n = info.param.scene + "_" + mutationName(info.param.type);
-        std::replace(n.begin(), n.end(), '-', '_');
-        return n;
-    });
+    [](const auto &info) { return gtestName(info.param.scene + "_" + mutationName(info.param.type)); });
 
 }  // namespace
 }  // namespace pf::test

@@ -12,42 +12,24 @@
 namespace pf::test {
 namespace {
 
-ConvergenceSetup longSetup(int budget, int maxDepth = 0) {
-    ConvergenceSetup s;
-    s.maxDepth = maxDepth;
-    s.res = 32;
-    s.seeds = 32;
-    s.referenceSpp = 128;
-    s.budget = budget;
-    s.sigmas = 5;
-    s.maxMedianError = 0.04;
-    s.maxImageError = 0.02;
-    return s;
-}
-
 struct Case {
     std::string scene;
     int budget;
     int maxDepth = 0;  // longest paths (0: the scene's)
 };
 
-std::string testName(std::string n) {
-    std::replace(n.begin(), n.end(), '-', '_');
-    return n;
-}
-
 class LongMEPTConvergence : public ::testing::TestWithParam<Case> {};
 
 // 49 comparisons per case at 5 standard errors of a Student t with 31 degrees of freedom.
 TEST_P(LongMEPTConvergence, AgreesWithBDPT) {
     expectSingleMutationConvergence(GetParam().scene, MutationType::Manifold,
-                                    longSetup(GetParam().budget, GetParam().maxDepth));
+                                    longConvergenceSetup(GetParam().budget, GetParam().maxDepth));
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, LongMEPTConvergence,
                          ::testing::Values(Case{"cornell-box", 16}, Case{"veach-bidir", 16}, Case{"pool", 16},
                                            Case{"pool-underwater", 16}, Case{"ring-caustic", 16, 3}),
-                         [](const auto &info) { return testName(info.param.scene); });
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 class LongMEMLTConvergence : public ::testing::TestWithParam<Case> {};
 
@@ -57,24 +39,24 @@ class LongMEMLTConvergence : public ::testing::TestWithParam<Case> {};
 TEST_P(LongMEMLTConvergence, AgreesWithBDPT) {
     expectConvergence(GetParam().scene, "memlt",
                       {{"directSamples", "-1"}, {"luminanceSamples", std::to_string(32 * 32 * 16)}},
-                      longSetup(GetParam().budget, GetParam().maxDepth), GetParam().scene + " memlt");
+                      longConvergenceSetup(GetParam().budget, GetParam().maxDepth), GetParam().scene + " memlt");
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, LongMEMLTConvergence,
                          ::testing::Values(Case{"cornell-box", 256}, Case{"veach-bidir", 512},
                                            Case{"ring-caustic", 1024, 3}),
-                         [](const auto &info) { return testName(info.param.scene); });
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 }  // namespace
 }  // namespace pf::test
 
 // The glossy extension of the manifold perturbation (offset manifolds, ALGORITHMS.md §6.6): the long version of
-// test_glossy_manifold's MEPT case on GLOSSY SPHERES, with the other cases' long set-up (longSetup above).
+// test_glossy_manifold's MEPT case on GLOSSY SPHERES, with the other cases' long set-up (longConvergenceSetup).
 namespace pf::test {
 namespace {
 
 TEST(LongGlossyManifold, MEPTAgreesWithBDPT) {
-    expectSingleMutationConvergence("glossy-spheres", MutationType::Manifold, longSetup(16));
+    expectSingleMutationConvergence("glossy-spheres", MutationType::Manifold, longConvergenceSetup(16));
 }
 
 }  // namespace

@@ -20,12 +20,7 @@ class LongMLTConvergence : public ::testing::TestWithParam<Case> {};
 // 49 comparisons per case at 5 standard errors of a Student t with 31 degrees of freedom.
 TEST_P(LongMLTConvergence, AgreesWithBDPT) {
     const Case &c = GetParam();
-    ConvergenceSetup s;
-    s.res = 32;
-    s.seeds = 32;
-    s.referenceSpp = 128;
-    s.budget = c.mutationsPerPixel;
-    s.sigmas = 5;
+    ConvergenceSetup s = longConvergenceSetup(c.mutationsPerPixel);
     s.maxMedianError = 0.03;
     s.maxImageError = 0.015;
     expectConvergence(c.scene, "mlt", c.params, s, c.scene + " mlt " + c.label);
@@ -47,11 +42,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, LongMLTConvergence,
                                            Case{"veach-bidir", "chains", kChainsOnly, 1024},
                                            Case{"veach-bidir", "defaults", kDefaults, 1024},
                                            Case{"veach-bidir", "bidirectional", kBidirectionalOnly, 1024}),
-                         [](const auto &info) {
-                             std::string n = info.param.scene + "_" + info.param.label;
-                             std::replace(n.begin(), n.end(), '-', '_');
-                             return n;
-                         });
+                         [](const auto &info) { return gtestName(info.param.scene + "_" + info.param.label); });
 
 }  // namespace
 }  // namespace pf::test

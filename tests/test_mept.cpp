@@ -13,11 +13,6 @@
 namespace pf::test {
 namespace {
 
-std::string testName(std::string n) {
-    std::replace(n.begin(), n.end(), '-', '_');
-    return n;
-}
-
 struct Case {
     std::string scene;
     int budget;        // seeds per pixel (mept) or mutations per pixel (memlt)
@@ -64,7 +59,7 @@ TEST_P(MEPTConvergence, AgreesWithBDPT) {
 INSTANTIATE_TEST_SUITE_P(Scenes, MEPTConvergence,
                          ::testing::Values(Case{"cornell-box", 8, 16, 0, 4}, Case{"veach-bidir", 8, 16, 0, 4},
                                            Case{"pool", 32}, Case{"ring-caustic", 8, 16, 3, 4}),
-                         [](const auto &info) { return testName(info.param.scene); });
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 class MEMLTConvergence : public ::testing::TestWithParam<Case> {};
 
@@ -93,7 +88,7 @@ TEST_P(MEMLTConvergence, AgreesWithBDPT) {
 INSTANTIATE_TEST_SUITE_P(Scenes, MEMLTConvergence,
                          ::testing::Values(Case{"cornell-box", 64, 24}, Case{"veach-bidir", 256},
                                            Case{"ring-caustic", 512, 16, 3}),
-                         [](const auto &info) { return testName(info.param.scene); });
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 TEST(ManifoldExploration, IntegratorsAndParameters) {
     auto scene = loadMLTTestScene("cornell-box", 8, 4);

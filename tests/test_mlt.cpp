@@ -45,11 +45,7 @@ TEST_P(MLTConvergence, AgreesWithBDPT) {
 // need many more steps on veach-mis, whose small bright lights are reached by few of them.
 INSTANTIATE_TEST_SUITE_P(Scenes, MLTConvergence,
                          ::testing::Values(Case{"cornell-box", 64}, Case{"veach-mis", 512}, Case{"veach-bidir", 256}),
-                         [](const auto &info) {
-                             std::string n = info.param.scene;
-                             std::replace(n.begin(), n.end(), '-', '_');
-                             return n;
-                         });
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 constexpr uint64_t kSeed = 1234;
 

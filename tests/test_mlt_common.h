@@ -158,6 +158,27 @@ struct ConvergenceSetup {
     int maxDepth = 0;
 };
 
+// The set-up of the long suites (label "long"): 32 x 32, 32 independent renders against a 128 spp BDPT
+// reference, 49 comparisons per case at 5 standard errors of a Student t with 31 degrees of freedom.
+inline ConvergenceSetup longConvergenceSetup(int budget, int maxDepth = 0) {
+    ConvergenceSetup s;
+    s.res = 32;
+    s.seeds = 32;
+    s.referenceSpp = 128;
+    s.budget = budget;
+    s.sigmas = 5;
+    s.maxMedianError = 0.04;
+    s.maxImageError = 0.02;
+    s.maxDepth = maxDepth;
+    return s;
+}
+
+// A scene name as a gtest parameter name ('-' is not allowed there).
+inline std::string gtestName(std::string name) {
+    std::replace(name.begin(), name.end(), '-', '_');
+    return name;
+}
+
 // The figures of a comparison, printed by every convergence case for the record: the median relative
 // combined standard error of the blocks expectBlocksAgree weighs (those above 1% of the image's mean), the
 // whole image's, and the largest |z| = |test - reference| / (combined standard error) over all comparisons.
