@@ -5,11 +5,19 @@
 // tasks, then chain tasks, which are formed once the seeding is merged (ARCHITECTURE.md "A job, end to
 // end").
 // The gRPC services (services.cpp) and the HTTP status module call this class; every public method is
-// thread-safe.
+// thread-safe. Its implementation is split by concern, one file each (the private section below lists
+// what each holds):
+//   master.cpp         construction, status queries and metrics
+//   job_lifecycle.cpp  submission, loading scenes, recovery after a restart, job states, cancelling
+//   scheduler.cpp      workers, leases, which task a worker gets next, failures, the reaper's expiry
+//   merger.cpp         a result's way from complete() through decoding and the in-order merge to the
+//                      checkpoint, the final image and previews
+//   chain_jobs.cpp     what a Markov-chain job does differently from an image job
+//   runtime.h          the in-memory model those files share (jobs, tasks, films, workers)
 //
 // Locking: `mu_` guards scheduling state and is only held for short, non-blocking work plus store
 // writes. Each job's film has its own mutex, held while results are merged and checkpoints written;
-// it may be taken before `mu_`, never after.
+// it may be taken before `mu_`, never after (so a film mutex is never awaited while `mu_` is held).
 #pragma once
 #include <chrono>
 #include <condition_variable>
@@ -129,10 +137,12 @@ public:
     void fail(const std::string &worker, int64_t attempt, const std::string &error);
 
 private:
-    struct JobFilm;
+    // The in-memory model of jobs, their tasks and films, and workers (runtime.h).
+    struct Loaded;
     struct ChainState;
-    struct JobRuntime;
     struct TaskRuntime;
+    struct JobFilm;
+    struct JobRuntime;
     struct WorkerRuntime;
     struct Lease {
         int64_t job, task;
@@ -140,41 +150,62 @@ private:
         Clock::time_point deadline;
     };
 
+    // ---- master.cpp ----
+    std::string jobDir(int64_t id) const;
+    void touch();  // under mu_: counts a change and wakes waitForChange
+
+    // ---- job_lifecycle.cpp ----
     void recover();
     void recoverJob(const StoredJob &stored);
-    struct Loaded;
     // Loads the job's scene and integrator from its bundle and fills in the record's scene figures.
     Loaded load(const JobSpec &spec, pathfarm::v1::Job &record) const;
     // Sets up the job's film side (the merged film, or the ChainJob) from what load() returned.
     void openFilm(JobRuntime &j, Loaded loaded);
-    void reaperLoop();
-
     // Under mu_.
     pathfarm::v1::Job snapshot(const JobRuntime &j) const;
+    void setState(JobRuntime &j, pathfarm::v1::JobState state, const std::string &error = "");
+
+    // ---- scheduler.cpp ----
+    void reaperLoop();
+    // Under mu_.
     std::optional<pathfarm::v1::TaskSpec> pickTask(WorkerRuntime &w);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
     bool mayIssue(JobRuntime &j);
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
                  const std::string &error, int64_t attempt);
     void countFailure(JobRuntime &j, const std::string &worker, const std::string &why);
-    void setState(JobRuntime &j, pathfarm::v1::JobState state, const std::string &error = "");
-    void touch();
 
+    // ---- merger.cpp ----
     // A result payload decoded by its task's kind: the film block of an image task, a seeding result, a
     // chain result. Throws farm::FarmError when it is corrupt.
     using TaskOutput = std::variant<ImageBlock, SeedingResult, ChainResult>;
     TaskOutput decodeOutput(const JobRuntime &j, const pathfarm::v1::TaskSpec &work, std::string_view payload) const;
-
     // Film side: called with the job's film mutex held.
     void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh);
     void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
-    // Once the seeding is merged: the chain phase starts (called with both mutexes held).
-    void startChains(JobRuntime &j);
     void checkpoint(JobRuntime &j);
     void finishIfComplete(JobRuntime &j);
     void closeFilm(JobRuntime &j);
     Bitmap develop(const JobRuntime &j) const;
-    std::string jobDir(int64_t id) const;
+
+    // ---- chain_jobs.cpp: Markov-chain jobs ----
+    // Task `index` of a chain job (chain tasks only once it is seeded), as the store and the workers see it.
+    static pathfarm::v1::TaskSpec chainTaskWork(const ChainJob &job, uint64_t index);
+    // openFilm for a chain job: the ChainJob that forms its tasks, and its figures in the record.
+    void openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &integrator);
+    // After a restart: merges the stored seeding results again and restores the checkpoint's direct
+    // component and chains. Throws when they cannot be read.
+    void restoreChainFilm(JobRuntime &j, const StoredJob &stored);
+    // Upper bound of a seeding result's payload.
+    static uint64_t maxSeedingPayloadBytes(const JobRuntime &j, const pathfarm::v1::TaskSpec &work);
+    // mergeOutput for a chain job's tasks (film mutex held).
+    static void mergeChainOutput(JobFilm &f, const pathfarm::v1::TaskSpec &work, TaskOutput output);
+    // Under both mutexes, after a merge: the record's chain figures, and the chain phase once seeded.
+    void recordChainMerge(JobRuntime &j, uint64_t seedingSamples, uint64_t directSamples);
+    // Once the seeding is merged: the chain phase starts (called with both mutexes held).
+    void startChains(JobRuntime &j);
+    // The checkpoint file's content for a chain job (film mutex held).
+    static std::string chainCheckpoint(const ChainJob &job);
 
     MasterConfig cfg_;
     farm::BundleStore bundles_;

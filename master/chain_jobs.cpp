@@ -1,0 +1,143 @@
+// Master: what a Markov-chain job (pssmlt, mmlt, mlt, erpt, ...) does differently from an image job.
+// Its tasks are those of a render/chain_job.h ChainJob, in three phases: seeding tasks (the candidates
+// b̂ and the chains' start points are drawn from), the direct component's image tasks, then chain tasks,
+// formed once every seeding result is merged. The scheduler (scheduler.cpp) and the merger (merger.cpp)
+// treat a chain job as a list of tasks and hand everything phase-specific to the functions here.
+// A new kind of chain-job task needs its TaskSpec in chainTaskWork, its payload's decoding in
+// decodeOutput (merger.cpp, with its type in Master::TaskOutput), and its merge in mergeChainOutput.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "farm/block_codec.h"
+#include "farm/chain_codec.h"
+#include "farm/error.h"
+#include "farm/rpc.h"
+#include "runtime.h"
+
+namespace pf::master {
+
+namespace v1 = pathfarm::v1;
+
+// ---------------------------------------------------------------------------------------------------
+// Tasks and the film
+
+v1::TaskSpec Master::chainTaskWork(const ChainJob &job, uint64_t index) {
+    v1::TaskSpec work;
+    switch (job.phaseOf(index)) {
+        case ChainJob::Phase::Seeding:
+            work.mutable_seeding()->set_first_pixel(job.seedingTask(index).firstPixel);
+            work.mutable_seeding()->set_pixel_count(job.seedingTask(index).pixelCount);
+            break;
+        case ChainJob::Phase::Direct:
+            work.mutable_image()->set_first_sample(job.directTask(index).firstSample);
+            work.mutable_image()->set_sample_count(job.directTask(index).sampleCount);
+            work.mutable_image()->set_direct(true);
+            break;
+        case ChainJob::Phase::Chain:
+            *work.mutable_chain() = farm::toProto(job.chainTask(index));
+            break;
+    }
+    return work;
+}
+
+void Master::openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &integrator) {
+    const JobSpec &spec = j.record.spec();
+    auto state = std::make_unique<ChainState>();
+    state->job = std::make_unique<ChainJob>(*loaded.scene, integrator, spec.seed(),
+                                            spec.budget().has_spp() ? spec.budget().spp() : 0);
+    state->loaded = std::move(loaded);
+    const ChainJob &job = *state->job;
+    j.chain = true;
+    j.seedingTasks = static_cast<int64_t>(job.seedingTaskCount());
+    j.chainFirst = static_cast<int64_t>(job.firstChainTask());
+    j.seedingSpp = job.seedingConfig().samplesPerPixel;
+    v1::ChainStats *stats = j.record.mutable_chain();
+    if (stats->phase() == v1::CHAIN_PHASE_UNSPECIFIED) stats->set_phase(v1::CHAIN_PHASE_SEEDING);
+    stats->set_seeding_tasks(job.seedingTaskCount());
+    stats->set_direct_tasks(job.directTaskCount());
+    stats->set_seeding_samples_per_pixel(j.seedingSpp);
+    j.film.chain = std::move(state);
+}
+
+uint64_t Master::maxSeedingPayloadBytes(const JobRuntime &j, const v1::TaskSpec &work) {
+    // Packed path records take at most 38 bytes; a BDPT sample yields one candidate per strategy.
+    constexpr uint64_t kRecordBytes = 40, kMaxCandidatesPerSample = 256;
+    return work.seeding().pixel_count() * static_cast<uint64_t>(j.seedingSpp) * kMaxCandidatesPerSample * kRecordBytes +
+           (64 << 10);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Merging
+
+void Master::mergeChainOutput(JobFilm &f, const v1::TaskSpec &work, TaskOutput output) {
+    ChainJob &job = *f.chain->job;
+    if (work.has_seeding()) {
+        job.mergeSeeding(std::move(std::get<SeedingResult>(output)));
+    } else if (work.has_chain()) {
+        job.mergeChain(std::get<ChainResult>(output));
+    } else {
+        job.mergeDirect(std::get<ImageBlock>(output), work.image().sample_count());
+    }
+    f.spp = job.mutationsPerPixel();
+}
+
+void Master::recordChainMerge(JobRuntime &j, uint64_t seedingSamples, uint64_t directSamples) {
+    const ChainJob &job = *j.film.chain->job;
+    v1::ChainStats *stats = j.record.mutable_chain();
+    const ChainImage &chains = job.chains();
+    stats->set_mutations(chains.mutations);
+    stats->set_mutations_per_pixel(job.mutationsPerPixel());
+    stats->set_seeding_samples(stats->seeding_samples() + seedingSamples);
+    stats->set_direct_samples(stats->direct_samples() + directSamples);
+    stats->set_direct_samples_per_pixel(job.directSamplesPerPixel());
+    farm::toProto(chains.counts, *stats->mutable_mutation_counts());
+    farm::toProto(chains.counters, *stats->mutable_counters());
+    if (job.seeded()) startChains(j);
+}
+
+void Master::startChains(JobRuntime &j) {
+    if (j.seeded) return;
+    const ChainJob &job = *j.film.chain->job;
+    j.seeded = true;
+    const uint64_t count = job.chainTaskCount();
+    if (j.total == 0 && count != UINT64_MAX) j.total = j.chainFirst + static_cast<int64_t>(count);
+    v1::ChainStats *stats = j.record.mutable_chain();
+    stats->set_phase(v1::CHAIN_PHASE_CHAINS);
+    stats->set_luminance(job.normalizer().luminance());
+    stats->set_candidates(job.normalizer().candidates().size());
+    spdlog::info("job={}: seeding merged: b = {:.6g} from {} candidates; {} chain tasks", j.record.id(),
+                 job.normalizer().luminance(), job.normalizer().candidates().size(),
+                 count == UINT64_MAX ? std::string("time budget decides the") : std::to_string(count));
+    workChanged_.notify_all();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Checkpoints and recovery
+
+std::string Master::chainCheckpoint(const ChainJob &job) {
+    v1::ChainCheckpoint cp;
+    cp.set_direct(farm::encodeBlock(job.direct()));
+    cp.set_direct_samples_per_pixel(job.directSamplesPerPixel());
+    *cp.mutable_chains() = farm::toProto(job.chains());
+    return cp.SerializeAsString();
+}
+
+void Master::restoreChainFilm(JobRuntime &j, const StoredJob &stored) {
+    // The seeding results merged before the restart are merged again from their files, then the
+    // checkpoint puts back the direct component and the chains.
+    ChainJob &job = *j.film.chain->job;
+    for (const StoredResult &r : store_.loadResults(j.record.id(), std::min(stored.mergedTasks, j.seedingTasks)))
+        job.mergeSeeding(std::get<SeedingResult>(
+            decodeOutput(j, chainTaskWork(job, static_cast<uint64_t>(r.taskIndex)), farm::readFile(r.file))));
+    if (stored.checkpoint.empty()) return;
+    v1::ChainCheckpoint cp;
+    if (!cp.ParseFromString(farm::readFile(stored.checkpoint)))
+        throw farm::FarmError("corrupt checkpoint " + stored.checkpoint);
+    ImageBlock direct = makeFilmBlock(job.scene());
+    farm::decodeBlock(cp.direct(), direct);
+    job.restore(std::move(direct), cp.direct_samples_per_pixel(),
+                farm::fromProto(cp.chains(), makeFilmBlock(job.scene())));
+}
+
+}  // namespace pf::master

@@ -1,0 +1,370 @@
+// Master: a result's way to the film, top to bottom. complete() accepts a result for the attempt that
+// holds its task's lease, decodes it (decodeOutput) and stores the payload in a file; mergeReady then
+// merges, in task order, every accepted result that is next (mergeOutput), so that the film has exactly
+// the bits of a local render; checkpoints let a restarted master resume from the merged film instead
+// of replaying every result; finishIfComplete writes the final image, closeFilm releases what an ended
+// job holds. preview() and image() develop the film on request.
+// Locking: a result is decoded and written with no lock held; the merge holds the job's film mutex and
+// takes mu_ only for the short updates of the job's record and the counters (film mutex before mu_).
+#include <fcntl.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "farm/block_codec.h"
+#include "farm/chain_codec.h"
+#include "farm/error.h"
+#include "farm/rpc.h"
+#include "runtime.h"
+
+namespace pf::master {
+
+namespace fs = std::filesystem;
+namespace v1 = pathfarm::v1;
+
+namespace {
+
+// Writes `data` to `path` through a temporary file and a rename, so that a reader (or a restarted
+// master) sees either nothing or the whole file. With `durable` the data reaches the disk before the
+// rename, for files that committed rows will name.
+void writeFileAtomic(const fs::path &path, std::string_view data, bool durable) {
+    const fs::path tmp = path.string() + ".tmp";
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw std::runtime_error("cannot write " + tmp.string());
+    for (size_t done = 0; done < data.size();) {
+        const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            ::close(fd);
+            throw std::runtime_error("cannot write " + tmp.string());
+        }
+        done += static_cast<size_t>(n);
+    }
+    if ((durable && ::fsync(fd) != 0) | (::close(fd) != 0)) throw std::runtime_error("cannot write " + tmp.string());
+    fs::rename(tmp, path);
+}
+
+}  // namespace
+
+uint64_t Master::maxPayloadBytes(int64_t attempt) const {
+    const std::lock_guard<std::mutex> lock(mu_);
+    for (const auto &[id, j] : jobs_) {
+        const auto a = j->attemptTask.find(attempt);
+        if (a == j->attemptTask.end() || !j->film.film) continue;
+        const v1::TaskSpec &work = j->tasks[static_cast<size_t>(a->second)].work;
+        if (work.has_seeding()) return maxSeedingPayloadBytes(*j, work);
+        // A film block (inside a ChainOutput for chain tasks, beside a few counts).
+        const Film &f = *j->film.film;
+        const uint64_t b = static_cast<uint64_t>(f.filter().borderSize());
+        const uint64_t raw = 7 * sizeof(double) * (f.cropWidth() + 2 * b) * (f.cropHeight() + 2 * b);
+        return raw + raw / 128 + (64 << 10);  // zstd's worst case is below raw + raw/256 + a header
+    }
+    return 0;
+}
+
+v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, const v1::TaskStats &stats,
+                                   const std::string &payload) {
+    if (const std::string reason = checkAttempt(worker, attempt); !reason.empty())
+        return ignoreResult(worker, attempt, reason);
+
+    JobRuntime *j = nullptr;
+    int64_t task = 0;
+    v1::TaskSpec work;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        for (auto &[id, job] : jobs_)
+            if (const auto a = job->attemptTask.find(attempt); a != job->attemptTask.end()) {
+                j = job.get();
+                task = a->second;
+                work = j->tasks[static_cast<size_t>(task)].work;
+            }
+    }
+    const int64_t jobId = j->record.id();
+    const auto t0 = Clock::now();
+    std::optional<TaskOutput> output;
+    try {
+        output.emplace(decodeOutput(*j, work, payload));
+    } catch (const farm::FarmError &e) {
+        fail(worker, attempt, std::string("corrupt result: ") + e.what());
+        throw;
+    }
+    const double decodeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    const fs::path file =
+        fs::path(jobDir(jobId)) / "results" / (std::to_string(task) + "-" + std::to_string(attempt) + ".blk");
+    writeFileAtomic(file, payload, false);
+
+    bool accepted = false;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        // The lease may have expired or the job ended while the payload was on its way.
+        TaskRuntime &t = j->tasks[static_cast<size_t>(task)];
+        if (!isActive(j->record.state()) || t.attempt != attempt || t.state == TaskRuntime::State::Accepted ||
+            t.state == TaskRuntime::State::Merged) {
+            fs::remove(file);
+        } else {
+            store_.acceptResult(jobId, task, attempt, file.string(), payload.size(), stats, unixMs());
+            t.state = TaskRuntime::State::Accepted;
+            accepted = true;
+            leases_.erase(attempt);
+            j->retry.erase(task);
+            if (task >= j->chainFirst) {
+                j->taskSeconds += stats.seconds();
+                ++j->taskCount;
+            }
+            if (const auto w = workers_.find(worker); w != workers_.end()) {
+                WorkerRuntime &wr = *w->second;
+                wr.attempts.erase(attempt);
+                wr.info.set_tasks_completed(wr.info.tasks_completed() + 1);
+                (work.has_chain() ? wr.mutationSeconds : wr.renderSeconds) += stats.seconds();
+                (work.has_chain() ? wr.mutations : wr.samples) += stats.samples();
+            }
+            counters_.resultBytes += payload.size();
+            counters_.mergeSeconds += decodeSeconds;
+            spdlog::info("job={} task={} attempt={} worker={}: accepted, {} bytes, {:.3f} s on the worker", jobId, task,
+                         attempt, worker, payload.size(), stats.seconds());
+            touch();
+        }
+    }
+    if (!accepted) return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
+    {
+        const std::lock_guard<std::mutex> filmLock(j->film.mu);
+        j->film.pending[task] = {file.string(), stats, work};
+        mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
+    }
+    v1::CompleteReply reply;
+    reply.set_accepted(true);
+    return reply;
+}
+
+v1::CompleteReply Master::ignoreResult(const std::string &worker, int64_t attempt, const std::string &reason) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    if (reason.rfind("superseded", 0) == 0) {
+        store_.ignoreAttempt(attempt, unixMs());
+        ++counters_.lateResultsIgnored;
+    }
+    spdlog::warn("attempt={} worker={}: result ignored: {}", attempt, worker, reason);
+    v1::CompleteReply reply;
+    reply.set_accepted(false);
+    reply.set_reason(reason);
+    return reply;
+}
+
+Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec &work, std::string_view payload) const {
+    const Film &film = *j.film.film;
+    const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
+    if (work.has_seeding())
+        return farm::decodeSeedingResult(payload, film,
+                                         SeedingTask{work.seeding().first_pixel(), work.seeding().pixel_count()});
+    if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
+    ImageBlock block = emptyBlock();
+    farm::decodeBlock(payload, block);
+    return block;
+}
+
+void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh) {
+    JobFilm &f = j.film;
+    if (!f.open()) return;
+    const int64_t before = f.merged;
+    // TaskStats.samples by the task's unit: pixel samples of image tasks (the direct component's
+    // apart), BDPT samples of seeding tasks, mutations of chain tasks.
+    uint64_t samples = 0, seedingSamples = 0, directSamples = 0, mutations = 0, rays = 0;
+    double seconds = 0, loadSeconds = 0;
+    for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
+        const auto t0 = Clock::now();
+        const v1::TaskSpec &work = it->second.work;
+        try {
+            mergeOutput(j, work,
+                        fresh && fresh->first == f.merged ? std::move(fresh->second)
+                                                          : decodeOutput(j, work, farm::readFile(it->second.file)));
+        } catch (const std::exception &e) {
+            // The master's own file is unreadable: the disk failed, and the job cannot be exact.
+            const std::lock_guard<std::mutex> lock(mu_);
+            setState(j, v1::JOB_FAILED, "stored result of task " + std::to_string(f.merged) + ": " + e.what());
+            return;
+        }
+        seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+        (work.has_seeding()                          ? seedingSamples
+         : work.has_chain()                          ? mutations
+         : work.has_image() && work.image().direct() ? directSamples
+                                                     : samples) += it->second.stats.samples();
+        rays += it->second.stats.rays();
+        loadSeconds += it->second.stats.scene_load_seconds();
+        if (!work.has_seeding()) f.mergedSinceCheckpoint.push_back(it->second.file);
+        f.pending.erase(it);
+        ++f.merged;
+    }
+    if (f.merged == before) return;
+    const auto now = Clock::now();
+    const bool complete = j.total > 0 && f.merged == j.total;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        for (int64_t t = before; t < f.merged; ++t) j.tasks[static_cast<size_t>(t)].state = TaskRuntime::State::Merged;
+        j.record.mutable_tasks()->set_merged(f.merged);
+        const uint64_t pixelSamples = samples + seedingSamples + directSamples;
+        j.record.set_samples_per_pixel(f.spp);
+        j.record.set_samples(j.record.samples() + pixelSamples);
+        j.record.set_rays(j.record.rays() + rays);
+        j.record.set_worker_scene_load_seconds(j.record.worker_scene_load_seconds() + loadSeconds);
+        if (f.chain) recordChainMerge(j, seedingSamples, directSamples);
+        counters_.resultsMerged += f.merged - before;
+        counters_.mergeSeconds += seconds;
+        counters_.samplesMerged += pixelSamples;
+        counters_.mutationsMerged += mutations;
+        const int64_t second = std::chrono::duration_cast<std::chrono::seconds>(now.time_since_epoch()).count();
+        if (recentSamples_.empty() || recentSamples_.back().first != second) recentSamples_.emplace_back(second, 0);
+        recentSamples_.back().second += pixelSamples;
+        while (recentSamples_.front().first < second - 59) recentSamples_.pop_front();
+        touch();
+    }
+    // Checkpoints only shorten the replay after a restart (results stay on disk until then), so a large
+    // film is checkpointed less often: at most 5% of the master's time goes into them.
+    const auto checkpointDue = std::max<Clock::duration>(cfg_.checkpointInterval, 20 * f.checkpointCost);
+    if (complete) {
+        finishIfComplete(j);
+    } else if (now - f.lastCheckpoint >= checkpointDue) {
+        checkpoint(j);
+    }
+}
+
+void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput output) {
+    JobFilm &f = j.film;
+    if (f.chain) {
+        mergeChainOutput(f, work, std::move(output));
+        return;
+    }
+    f.block->merge(std::get<ImageBlock>(output));
+    f.spp += work.image().sample_count();
+}
+
+void Master::checkpoint(JobRuntime &j) {
+    JobFilm &f = j.film;
+    if (f.merged == f.checkpointed) return;
+    const auto start = Clock::now();
+    const fs::path file = fs::path(jobDir(j.record.id())) / ("checkpoint-" + std::to_string(f.merged) + ".blk");
+    writeFileAtomic(file, f.chain ? chainCheckpoint(*f.chain->job) : farm::encodeBlock(*f.block), true);
+    v1::Job record;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        record = snapshot(j);
+    }
+    store_.commitCheckpoint(record, f.checkpointed, f.merged, file.string(), unixMs());
+    // Only now are the old checkpoint and the merged results redundant.
+    std::error_code ec;
+    if (!f.checkpointFile.empty() && f.checkpointFile != file.string()) fs::remove(f.checkpointFile, ec);
+    for (const std::string &r : f.mergedSinceCheckpoint) fs::remove(r, ec);
+    f.mergedSinceCheckpoint.clear();
+    spdlog::debug("job={}: checkpoint of {} tasks", j.record.id(), f.merged);
+    f.checkpointed = f.merged;
+    f.checkpointFile = file.string();
+    f.lastCheckpoint = Clock::now();
+    f.checkpointCost = f.lastCheckpoint - start;
+}
+
+void Master::finishIfComplete(JobRuntime &j) {
+    JobFilm &f = j.film;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        if (j.record.state() != v1::JOB_RUNNING || j.total == 0 || f.merged < j.total || !f.open()) return;
+    }
+    // The job's true time ends with its last merge, before the I/O of finishing it.
+    const int64_t endMs = unixMs();
+    const double seconds = (endMs - j.record.started_unix_ms()) / 1000.0;
+    checkpoint(j);
+    Bitmap image = develop(j);
+    const JobSpec &spec = j.record.spec();
+    image.metadata["pathfarm.integrator"] = j.record.integrator();
+    image.metadata["pathfarm.spp"] = std::to_string(f.spp);
+    image.metadata["pathfarm.seed"] = std::to_string(spec.seed());
+    image.metadata["pathfarm.renderSeconds"] = std::to_string(seconds);
+    image.metadata["pathfarm.sceneLoadSeconds"] = std::to_string(j.record.scene_load_seconds());
+    image.metadata["pathfarm.workerSceneLoadSeconds"] = std::to_string(j.record.worker_scene_load_seconds());
+    image.metadata["pathfarm.scene"] = j.record.scene_file();
+    image.metadata["pathfarm.job"] = std::to_string(j.record.id());
+    image.metadata["pathfarm.tasks"] = std::to_string(f.merged);
+    if (spec.budget().has_time_seconds())
+        image.metadata["pathfarm.timeBudget"] = std::to_string(spec.budget().time_seconds());
+    writeEXR((fs::path(jobDir(j.record.id())) / "image.exr").string(), image);
+    f.preview = std::make_shared<const Bitmap>(std::move(image));
+    f.previewMerged = f.merged;
+    const std::lock_guard<std::mutex> lock(mu_);
+    j.record.set_finished_unix_ms(endMs);
+    setState(j, v1::JOB_DONE);
+    spdlog::info("job={}: {} tasks, {} spp in {:.2f} s", j.record.id(), f.merged, f.spp, j.record.render_seconds());
+}
+
+void Master::closeFilm(JobRuntime &j) {
+    JobFilm &f = j.film;
+    if (!f.open()) return;
+    // What a cancelled or failed job got to stays fetchable; a finished job has its final image already.
+    const fs::path image = fs::path(jobDir(j.record.id())) / "image.exr";
+    std::error_code ec;
+    if (f.merged > 0 && !fs::exists(image, ec)) {
+        f.preview = std::make_shared<const Bitmap>(develop(j));
+        f.previewMerged = f.merged;
+        writeEXR(image.string(), *f.preview);
+    }
+    f.block.reset();
+    f.chain.reset();
+    f.pending.clear();
+    fs::remove_all(fs::path(jobDir(j.record.id())) / "results", ec);
+}
+
+Bitmap Master::develop(const JobRuntime &j) const {
+    if (j.film.chain) return j.film.chain->job->develop();
+    return j.film.film->develop(*j.film.block, 1.0 / static_cast<double>(j.film.spp));
+}
+
+std::shared_ptr<const Bitmap> Master::preview(int64_t id) {
+    JobRuntime *j = nullptr;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        const auto it = jobs_.find(id);
+        if (it == jobs_.end()) return nullptr;
+        j = it->second.get();
+    }
+    JobFilm &f = j->film;
+    const std::lock_guard<std::mutex> filmLock(f.mu);
+    const auto now = Clock::now();
+    if (f.open() && f.merged > f.previewMerged && now - f.lastPreview >= std::chrono::milliseconds(250)) {
+        f.preview = std::make_shared<const Bitmap>(develop(*j));
+        f.previewMerged = f.merged;
+        f.lastPreview = now;
+    }
+    return f.preview;
+}
+
+std::optional<Master::ExrImage> Master::image(int64_t id) const {
+    JobRuntime *j = nullptr;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        const auto it = jobs_.find(id);
+        if (it == jobs_.end()) return std::nullopt;
+        j = it->second.get();
+    }
+    const std::lock_guard<std::mutex> filmLock(j->film.mu);
+    ExrImage out;
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        out.final = j->record.state() == v1::JOB_DONE;
+        out.samplesPerPixel = j->record.samples_per_pixel();
+    }
+    // A job that ended has its image in a file (final, or what a cancelled or failed job got to);
+    // a running one is developed now.
+    const fs::path ended = fs::path(jobDir(id)) / "image.exr";
+    std::error_code ec;
+    if (fs::exists(ended, ec)) {
+        out.bytes = farm::readFile(ended.string());
+        return out;
+    }
+    if (!j->film.open() || j->film.merged == 0) return std::nullopt;
+    // writeEXR writes files only; the running image goes through a private temporary one.
+    const fs::path tmp = fs::path(jobDir(id)) / "running.exr";
+    writeEXR(tmp.string(), develop(*j));
+    out.bytes = farm::readFile(tmp.string());
+    fs::remove(tmp);
+    return out;
+}
+
+}  // namespace pf::master

@@ -1,0 +1,121 @@
+// The Master's in-memory model of jobs, their tasks and films, and workers, shared by the files that
+// implement the class (master.h lists them). Which mutex guards what: everything in JobRuntime and
+// WorkerRuntime is under Master::mu_, except the JobFilm, which is under its own mutex (taken before mu_,
+// never after). Internal to the master; nothing outside master/ includes it.
+#pragma once
+#include <chrono>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "master.h"
+#include "render/image_task.h"
+#include "scene/scene.h"
+
+namespace pf::master {
+
+inline int64_t unixMs() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+inline bool isActive(pathfarm::v1::JobState s) {
+    return s == pathfarm::v1::JOB_QUEUED || s == pathfarm::v1::JOB_RUNNING;
+}
+
+// Size of every image task in a budget of `spp` samples per pixel; a time budget draws tasks of the
+// largest size (so a timed job that ended after n tasks has exactly the bits of an spp job of the
+// same sample count).
+inline int64_t taskSize(const JobSpec &spec, int64_t firstSample) {
+    return imageTaskSize(spec.budget().has_spp() ? spec.budget().spp() : std::numeric_limits<int64_t>::max(),
+                         firstSample);
+}
+
+struct Master::Loaded {
+    std::unique_ptr<Scene> scene;
+    std::unique_ptr<Integrator> integrator;
+};
+
+// A Markov-chain job's film side: the scene and integrator its chain tasks are formed with, and the
+// ChainJob that forms them and merges the results.
+struct Master::ChainState {
+    Loaded loaded;
+    std::unique_ptr<ChainJob> job;
+};
+
+struct Master::TaskRuntime {
+    enum class State { Pending, Leased, Accepted, Merged };
+    pathfarm::v1::TaskSpec work;  // task_index and work
+    State state = State::Pending;
+    int64_t attempt = 0;             // the latest attempt; only its result is accepted
+    std::set<std::string> failedOn;  // workers on which an attempt failed
+    int failures = 0;
+};
+
+struct Master::JobFilm {
+    std::mutex mu;
+    std::shared_ptr<Film> film;  // set once before the job is visible; immutable after
+    // What the merged results form, released when the job ends: an image job's film, or a Markov-chain
+    // job's ChainState.
+    std::optional<ImageBlock> block;
+    std::unique_ptr<ChainState> chain;
+    bool open() const { return block || chain; }
+    int64_t merged = 0;        // tasks [0, merged) are in `block`
+    int64_t checkpointed = 0;  // tasks [0, checkpointed) are in the checkpoint file
+    int64_t spp = 0;           // image jobs: samples per pixel merged
+    struct Pending {
+        std::string file;
+        pathfarm::v1::TaskStats stats;
+        pathfarm::v1::TaskSpec work;
+    };
+    std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
+    // Their result files, deleted once checkpointed (a chain job's seeding results are kept: they are
+    // merged again after a restart).
+    std::vector<std::string> mergedSinceCheckpoint;
+    std::string checkpointFile;
+    Clock::time_point lastCheckpoint = Clock::now();
+    // The last developed image, of tasks [0, previewMerged).
+    std::shared_ptr<const Bitmap> preview;
+    int64_t previewMerged = 0;
+    Clock::time_point lastPreview;
+    Clock::duration checkpointCost{};  // of the last checkpoint
+};
+
+struct Master::JobRuntime {
+    pathfarm::v1::Job record;        // spec, state, error, times and merged figures; counts are filled in by snapshot()
+    std::vector<TaskRuntime> tasks;  // issued tasks, by index
+    std::set<int64_t> retry;         // issued tasks waiting for another attempt, lowest first
+    int64_t nextFirstSample = 0;
+    int64_t total = 0;  // tasks the job will have; 0 while a time budget is open or the seeding runs
+    // Markov-chain jobs: tasks [0, chainFirst) seed the chains and render the direct component; chain tasks
+    // are issued once `seeded` (the normalizer exists, and is immutable from then on).
+    bool chain = false;
+    int64_t seedingTasks = 0, chainFirst = 0, seedingSpp = 0;
+    bool seeded = false;
+    std::map<std::string, int> failuresByWorker;
+    std::set<std::string> blocklist;
+    double taskSeconds = 0;  // of accepted results that the time budget issues, for its estimate
+    int64_t taskCount = 0;
+    int64_t failedAttempts = 0, expiredAttempts = 0;
+    std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task
+    bool filmOpen = false;                   // the film still holds memory or result files to release once the job ends
+    JobFilm film;
+};
+
+struct Master::WorkerRuntime {
+    pathfarm::v1::WorkerInfo info;
+    Clock::time_point lastSeen;
+    bool draining = false;
+    std::set<int64_t> attempts;
+    // Completed tasks in their two units: pixel samples (image and seeding tasks), mutations (chains).
+    double renderSeconds = 0, mutationSeconds = 0;
+    uint64_t samples = 0, mutations = 0;
+};
+
+}  // namespace pf::master

@@ -1,0 +1,299 @@
+// Master: scheduling. Workers register and ask for work; pickTask gives each the highest-priority job
+// it may work on and nextTaskFor that job's next task (a retry first, on another worker when one could
+// take it, else a new task while mayIssue allows); leases are renewed by heartbeats, and failed or
+// expired attempts go back to the queue and count towards blocklists. The reaper expires leases and
+// lost workers, closes time budgets and hands finished jobs to the merger (merger.cpp).
+// Everything here runs under mu_, but the reaper's calls into the film side, which take the film mutex
+// with mu_ released.
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <random>
+
+#include "farm/convert.h"
+#include "runtime.h"
+
+namespace pf::master {
+
+namespace fs = std::filesystem;
+namespace v1 = pathfarm::v1;
+
+namespace {
+
+std::string newWorkerId() {
+    std::random_device rd;
+    std::uniform_int_distribution<int> hex(0, 15);
+    std::string id = "w-";
+    for (int i = 0; i < 12; ++i) id += "0123456789abcdef"[hex(rd)];
+    return id;
+}
+
+}  // namespace
+
+v1::RegisterReply Master::registerWorker(const v1::RegisterRequest &req, const std::string &peer) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    std::string id = req.worker_id();
+    if (id.empty() || !workers_.count(id)) {
+        id = newWorkerId();
+        auto w = std::make_unique<WorkerRuntime>();
+        w->info.set_id(id);
+        w->info.set_registered_unix_ms(unixMs());
+        workers_.emplace(id, std::move(w));
+    }
+    WorkerRuntime &w = *workers_.at(id);
+    w.info.set_name(req.name().substr(0, 256));
+    w.info.set_version(req.version().substr(0, 64));
+    w.info.set_cores(req.cores());
+    w.info.set_threads(req.threads());
+    w.info.clear_algorithms();
+    for (const auto &a : req.algorithms()) w.info.add_algorithms(a.substr(0, 64));
+    w.info.set_peer(peer);
+    w.info.set_state(v1::WORKER_IDLE);
+    w.info.set_last_seen_unix_ms(unixMs());
+    w.lastSeen = Clock::now();
+    w.draining = false;
+    store_.saveWorker(w.info);
+    spdlog::info("worker={}: registered: name '{}', version {}, {} threads of {} cores, peer {}", id, w.info.name(),
+                 w.info.version(), w.info.threads(), w.info.cores(), peer);
+    workChanged_.notify_all();
+    v1::RegisterReply reply;
+    reply.set_worker_id(id);
+    reply.set_lease_ms(cfg_.leaseTime.count());
+    reply.set_heartbeat_ms(cfg_.heartbeat.count());
+    reply.set_max_message_bytes(static_cast<uint64_t>(cfg_.maxMessageBytes));
+    return reply;
+}
+
+std::optional<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::milliseconds wait) {
+    const auto until = Clock::now() + std::min<std::chrono::milliseconds>(wait, std::chrono::seconds(30));
+    std::unique_lock<std::mutex> lock(mu_);
+    for (;;) {
+        const auto it = workers_.find(worker);
+        if (it == workers_.end()) throw UnknownWorker("unknown worker '" + worker + "'");
+        WorkerRuntime &w = *it->second;
+        w.lastSeen = Clock::now();
+        w.info.set_last_seen_unix_ms(unixMs());
+        if (w.info.state() == v1::WORKER_LOST) w.info.set_state(v1::WORKER_IDLE);
+        if (w.draining || stopping_) return std::nullopt;
+        if (auto task = pickTask(w)) return task;
+        if (workChanged_.wait_until(lock, until) == std::cv_status::timeout) return std::nullopt;
+    }
+}
+
+std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
+    std::vector<JobRuntime *> order;
+    for (auto &[id, j] : jobs_)
+        if (isActive(j->record.state())) order.push_back(j.get());
+    std::stable_sort(order.begin(), order.end(), [](const JobRuntime *a, const JobRuntime *b) {
+        return a->record.spec().priority() > b->record.spec().priority();
+    });
+    const auto &algs = w.info.algorithms();
+    for (JobRuntime *jp : order) {
+        JobRuntime &j = *jp;
+        if (j.blocklist.count(w.info.id())) continue;
+        if (!algs.empty() && std::find(algs.begin(), algs.end(), j.record.integrator()) == algs.end()) continue;
+        const std::optional<int64_t> index = nextTaskFor(j, w);
+        if (!index) continue;
+        TaskRuntime &t = j.tasks[static_cast<size_t>(*index)];
+        const bool isNew = t.attempt == 0 && t.failures == 0;
+        v1::TaskSpec spec = t.work;
+        spec.set_job_id(j.record.id());
+        *spec.mutable_job() = j.record.spec();
+        spec.set_scene_file(j.record.scene_file());
+        const int64_t now = unixMs();
+        const int64_t attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
+        spec.set_attempt_id(attempt);
+        t.state = TaskRuntime::State::Leased;
+        t.attempt = attempt;
+        j.attemptTask[attempt] = *index;
+        leases_[attempt] = {j.record.id(), *index, w.info.id(), Clock::now() + cfg_.leaseTime};
+        w.attempts.insert(attempt);
+        if (j.record.state() == v1::JOB_QUEUED) {
+            j.record.set_state(v1::JOB_RUNNING);
+            j.record.set_started_unix_ms(now);
+            store_.saveJob(snapshot(j));
+        }
+        spdlog::info("job={} task={} attempt={} worker={}: leased, {}", j.record.id(), *index, attempt, w.info.id(),
+                     farm::describeWork(spec));
+        touch();
+        return spec;
+    }
+    return std::nullopt;
+}
+
+std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w) {
+    for (const int64_t index : j.retry) {
+        const TaskRuntime &t = j.tasks[static_cast<size_t>(index)];
+        // Retries go to other workers when there are any that could take them.
+        const bool otherCandidate = std::any_of(workers_.begin(), workers_.end(), [&](const auto &entry) {
+            const WorkerRuntime &o = *entry.second;
+            return &o != &w && o.info.state() != v1::WORKER_LOST && !o.draining && !j.blocklist.count(o.info.id()) &&
+                   !t.failedOn.count(o.info.id());
+        });
+        if (t.failedOn.count(w.info.id()) && otherCandidate) continue;
+        j.retry.erase(index);
+        return index;
+    }
+    if (!mayIssue(j)) return std::nullopt;
+    TaskRuntime t;
+    const int64_t index = static_cast<int64_t>(j.tasks.size());
+    if (j.chain) {
+        // The chain job's tasks never change once issued: only its merged results and the normalizer,
+        // which is immutable once `seeded`, are read here.
+        t.work = chainTaskWork(*j.film.chain->job, static_cast<uint64_t>(index));
+    } else {
+        t.work.mutable_image()->set_first_sample(j.nextFirstSample);
+        t.work.mutable_image()->set_sample_count(taskSize(j.record.spec(), j.nextFirstSample));
+        j.nextFirstSample += t.work.image().sample_count();
+    }
+    t.work.set_task_index(index);
+    j.tasks.push_back(std::move(t));
+    return index;
+}
+
+bool Master::mayIssue(JobRuntime &j) {
+    const int64_t issued = static_cast<int64_t>(j.tasks.size());
+    // A chain job's seeding and direct tasks are all issued; its chain tasks wait for b̂.
+    if (j.chain && (issued < j.chainFirst || !j.seeded)) return issued < j.chainFirst;
+    if (j.total > 0) return issued < j.total;
+    if (issued == j.chainFirst) return true;  // a time budget runs at least one task (of chains)
+    // The clock decides whether another whole task is issued, never when one stops: issue while the
+    // expected end of a new task is within the budget.
+    const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
+    const double estimate = j.taskCount > 0 ? j.taskSeconds / static_cast<double>(j.taskCount) : 0.0;
+    if (elapsed + estimate <= j.record.spec().budget().time_seconds()) return true;
+    j.total = static_cast<int64_t>(j.tasks.size());
+    store_.saveJob(snapshot(j));
+    spdlog::info("job={}: time budget reached after {:.2f} s: {} tasks issued", j.record.id(), elapsed, j.total);
+    touch();
+    return false;
+}
+
+std::vector<int64_t> Master::heartbeat(const std::string &worker, const std::vector<int64_t> &attempts, bool draining) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    const auto it = workers_.find(worker);
+    if (it == workers_.end()) throw UnknownWorker("unknown worker '" + worker + "'");
+    WorkerRuntime &w = *it->second;
+    w.lastSeen = Clock::now();
+    w.info.set_last_seen_unix_ms(unixMs());
+    if (draining && !w.draining) spdlog::info("worker={}: draining", worker);
+    w.draining = draining;
+    std::vector<int64_t> lost;
+    for (const int64_t a : attempts) {
+        const auto l = leases_.find(a);
+        if (l != leases_.end() && l->second.worker == worker) {
+            l->second.deadline = Clock::now() + cfg_.leaseTime;
+        } else {
+            lost.push_back(a);
+        }
+    }
+    if (w.info.state() == v1::WORKER_LOST) w.info.set_state(v1::WORKER_IDLE);
+    return lost;
+}
+
+void Master::countFailure(JobRuntime &j, const std::string &worker, const std::string &why) {
+    if (++j.failuresByWorker[worker] < cfg_.maxFailuresPerWorker || !j.blocklist.insert(worker).second) return;
+    const std::string reason = std::to_string(j.failuresByWorker[worker]) + " failures, the last: " + why;
+    store_.blocklist(j.record.id(), worker, reason);
+    spdlog::warn("job={} worker={}: blocklisted for this job after {}", j.record.id(), worker, reason);
+}
+
+void Master::requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
+                     const std::string &error, int64_t attempt) {
+    store_.endAttempt(attempt, state, error, unixMs());
+    leases_.erase(attempt);
+    if (const auto w = workers_.find(worker); w != workers_.end()) w->second->attempts.erase(attempt);
+    TaskRuntime &t = j.tasks[static_cast<size_t>(task)];
+    t.state = TaskRuntime::State::Pending;
+    j.retry.insert(task);
+    countFailure(j, worker, error);
+    touch();
+    workChanged_.notify_all();
+}
+
+void Master::fail(const std::string &worker, int64_t attempt, const std::string &error) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    const auto l = leases_.find(attempt);
+    if (l == leases_.end() || l->second.worker != worker) return;  // expired or superseded already
+    JobRuntime &j = *jobs_.at(l->second.job);
+    const int64_t task = l->second.task;
+    const std::string message = error.substr(0, 4096);
+    spdlog::warn("job={} task={} attempt={} worker={}: failed: {}", j.record.id(), task, attempt, worker, message);
+    TaskRuntime &t = j.tasks[static_cast<size_t>(task)];
+    ++t.failures;
+    t.failedOn.insert(worker);
+    ++j.failedAttempts;
+    ++counters_.attemptsFailed;
+    requeue(j, task, worker, attempt_state::kFailed, message, attempt);
+    if (t.failures >= cfg_.maxFailuresPerTask)
+        setState(j, v1::JOB_FAILED,
+                 "task " + std::to_string(task) + " failed " + std::to_string(t.failures) + " times; last: " + message);
+}
+
+std::string Master::checkAttempt(const std::string &worker, int64_t attempt) const {
+    const std::lock_guard<std::mutex> lock(mu_);
+    for (const auto &[id, j] : jobs_) {
+        const auto a = j->attemptTask.find(attempt);
+        if (a == j->attemptTask.end()) continue;
+        const TaskRuntime &t = j->tasks[static_cast<size_t>(a->second)];
+        if (t.attempt != attempt || t.state == TaskRuntime::State::Accepted || t.state == TaskRuntime::State::Merged)
+            return "superseded: task " + std::to_string(a->second) + " was given to another attempt";
+        if (!isActive(j->record.state()))
+            return "job " + std::to_string(id) + " is " + farm::stateName(j->record.state());
+        const auto l = leases_.find(attempt);
+        if (l != leases_.end() && l->second.worker != worker) return "attempt belongs to another worker";
+        return "";
+    }
+    return "unknown attempt " + std::to_string(attempt);
+}
+
+void Master::reaperLoop() {
+    const auto period = std::clamp<std::chrono::milliseconds>(cfg_.leaseTime / 10, std::chrono::milliseconds(20),
+                                                              std::chrono::milliseconds(500));
+    std::unique_lock<std::mutex> lock(mu_);
+    while (!stopping_) {
+        workChanged_.wait_for(lock, period);
+        if (stopping_) break;
+        const auto now = Clock::now();
+        for (auto it = leases_.begin(); it != leases_.end();) {
+            const auto [attempt, lease] = *it++;
+            if (lease.deadline > now) continue;
+            JobRuntime &j = *jobs_.at(lease.job);
+            spdlog::warn("job={} task={} attempt={} worker={}: lease expired", lease.job, lease.task, attempt,
+                         lease.worker);
+            ++j.expiredAttempts;
+            ++counters_.attemptsExpired;
+            requeue(j, lease.task, lease.worker, attempt_state::kExpired, "lease expired (no heartbeat)", attempt);
+        }
+        for (auto &[id, w] : workers_)
+            if (w->info.state() != v1::WORKER_LOST && now - w->lastSeen > cfg_.leaseTime) {
+                w->info.set_state(v1::WORKER_LOST);
+                store_.saveWorker(w->info);
+                spdlog::warn("worker={}: lost (no contact for {} ms)", id, cfg_.leaseTime.count());
+                touch();
+            }
+        std::vector<JobRuntime *> complete, ended;
+        for (auto &[id, j] : jobs_) {
+            if (!isActive(j->record.state())) {
+                if (j->filmOpen) ended.push_back(j.get());
+                continue;
+            }
+            if (j->total == 0 && j->record.state() == v1::JOB_RUNNING)
+                mayIssue(*j);  // closes a time budget even when no worker asks for work
+            if (j->total > 0 && j->record.tasks().merged() == j->total) complete.push_back(j.get());
+        }
+        lock.unlock();
+        for (JobRuntime *j : complete) {
+            const std::lock_guard<std::mutex> filmLock(j->film.mu);
+            finishIfComplete(*j);
+        }
+        for (JobRuntime *j : ended) {
+            const std::lock_guard<std::mutex> filmLock(j->film.mu);
+            closeFilm(*j);
+        }
+        lock.lock();
+        for (JobRuntime *j : ended) j->filmOpen = false;
+    }
+}
+
+}  // namespace pf::master
