@@ -1,10 +1,12 @@
 // Master: what a Markov-chain job (pssmlt, mmlt, mlt, erpt, ...) does differently from an image job.
-// Its tasks are those of a render/chain_job.h ChainJob, in three phases: seeding tasks (the candidates
-// b̂ and the chains' start points are drawn from), the direct component's image tasks, then chain tasks,
-// formed once every seeding result is merged. The scheduler (scheduler.cpp) and the merger (merger.cpp)
-// treat a chain job as a list of tasks and hand everything phase-specific to the functions here.
-// A new kind of chain-job task needs its TaskSpec in chainTaskWork, its payload's decoding in
-// decodeOutput (merger.cpp, with its type in Master::TaskOutput), and its merge in mergeChainOutput.
+// Its tasks are those of a render/chain_job.h ChainJob, in three phases: BDPT seeding tasks (candidate
+// records and luminance sums, from which the master forms b̂ and the chains' starts), the direct
+// component's image tasks, then chain tasks, formed once every seeding result is merged. The scheduler
+// (scheduler.cpp) and the merger (merger.cpp) treat a chain job as a list of tasks and hand everything
+// phase-specific to the functions here; what they keep is the gate of the chain phase (mayIssue issues
+// tasks from chainFirst on only once `seeded`) and the decoding of payloads by task kind (decodeOutput).
+// A new kind of chain-job task needs its TaskSpec in chainTaskWork, its payload's type in
+// Master::TaskOutput and its decoding in decodeOutput, and its merge in mergeChainOutput.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
