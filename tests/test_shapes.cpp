@@ -161,6 +161,33 @@ TEST(ShapeHits, Rectangle) {
     expectVecNear(its.n, Vec3(0, 0, -1), 1e-12, "flipped n");
 }
 
+// Mitsuba 0.6 refuses a rectangle whose toWorld shears it (rectangle.cpp, configure(): its area
+// |dpdu| |dpdv| and frame assume perpendicular edges). pathfarm renders the parallelogram (README,
+// "Where pathfarm reads a scene differently from Mitsuba 0.6"): area |dpdu x dpdv|, uniform positions,
+// the normal perpendicular to the plane on the side toWorld maps +z to.
+TEST(ShapeHits, ShearedRectangleIsAParallelogram) {
+    Matrix4 m = Matrix4::identity();
+    m.m[0][1] = 0.75;  // x += 0.75 y: dpdu = (2, 0, 0), dpdv = (1.5, 2, 0)
+    m.m[2][2] = 3.0;   // and a z scale, which must not tilt the normal
+    Properties p = shapeProps("rectangle");
+    setTransform(p, "toWorld", Transform(m));
+    auto scene = makeScene({makeShape(p)});
+    const Shape &rect = *scene->shapes()[0];
+    EXPECT_NEAR(rect.surfaceArea(), 4.0, 1e-12);  // Mitsuba's formula would give 2 * 2.5 = 5
+    Intersection its;
+    ASSERT_TRUE(scene->intersect(Ray(Vec3(1.6, 0.9, 1), Vec3(0, 0, -1)), its));  // inside: x - 0.75 y = 0.925
+    expectVecNear(its.n, Vec3(0, 0, 1), 1e-12, "n");
+    EXPECT_FALSE(scene->intersect(Ray(Vec3(1.7, -0.9, 1), Vec3(0, 0, -1)), its));  // x - 0.75 y = 2.375 > 1
+    for (const Vec2 u : {Vec2(0.1, 0.2), Vec2(0.5, 0.5), Vec2(0.9, 0.7)}) {
+        PositionSample ps;
+        rect.samplePosition(ps, u);
+        expectVecNear(ps.n, Vec3(0, 0, 1), 1e-12, "sampled n");
+        EXPECT_NEAR(ps.pdf, 0.25, 1e-12);
+        EXPECT_LE(std::abs(ps.p.x - 0.75 * ps.p.y), 1.0 + 1e-12);
+        EXPECT_LE(std::abs(ps.p.y), 1.0 + 1e-12);
+    }
+}
+
 // A mirroring transform must not turn a faceted mesh inside out.
 TEST(ShapeHits, MirroredCubeKeepsOutwardNormals) {
     Properties p = shapeProps("cube");

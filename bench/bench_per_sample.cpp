@@ -1,0 +1,172 @@
+// Per-sample quality apart from speed: the relative MSE of integrators at a fixed number of samples (or
+// mutations) per pixel, averaged over seeds, against a reference (issue 20: pathfarm's error per sample
+// next to Mitsuba 0.6's, before the speed of either enters; an equal-time ratio is then this ratio times
+// the ratio of samples per second).
+//
+//   bench_per_sample [--res N] [--spp N] [--seeds K] [--integrators a,b,..] [--threads N]
+//                    [--reference FILE.exr | --ref-spp N] [--block B] [--worst M] [scene.xml]
+//
+// For each integrator (default bdpt,path) K renders (default 3; seeds 1..K) at N x N (default 64) with N
+// spp (default 16), and for each
+//     relMSE = mean over pixels and channels of (x - r)^2 / (r^2 + 1e-2)
+// per pixel and over B x B block means (default 8; the measure of issue 20, which averages most of the
+// pixel noise out and keeps systematic differences), with the mean over seeds and its standard error.
+// Then the M blocks (default 4) holding most of the block error of the first integrator, with their mean
+// luminance in its renders and in the reference and their share of the block error: a systematic
+// difference (veach-bidir's wall lamp against Mitsuba) shows where it sits. The reference is an EXR of
+// the same resolution (a long Mitsuba or pathfarm render) or, without --reference, a pathfarm BDPT render
+// with --ref-spp samples per pixel (default 1024, seed 1000). Prints figures only; never passes or fails.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench_support.h"
+#include "image/bitmap.h"
+#include "integrators/integrator.h"
+#include "scene/scene.h"
+
+namespace {
+
+struct Options {
+    int res = 64, spp = 16, seeds = 3, refSpp = 1024, block = 8, worst = 4;
+    int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    std::vector<std::string> integrators = {"bdpt", "path"};
+    std::string scene = "scenes/veach-bidir/scene.xml", reference;
+};
+
+double luminance(const pf::Spectrum &s) { return 0.212671 * s.r + 0.715160 * s.g + 0.072169 * s.b; }
+
+// Per block and channel, the mean of the block's pixels (blocks cut by the border are left out).
+std::vector<pf::Spectrum> blockMeans(const pf::Bitmap &img, int b) {
+    std::vector<pf::Spectrum> means;
+    for (int by = 0; by + b <= img.height; by += b)
+        for (int bx = 0; bx + b <= img.width; bx += b) {
+            pf::Spectrum sum(0.0);
+            for (int y = by; y < by + b; ++y)
+                for (int x = bx; x < bx + b; ++x) sum += img.get(x, y);
+            means.push_back(sum / (b * b));
+        }
+    return means;
+}
+
+// relMSE's term per block, summed over channels (the epsilon of pathfarm diff).
+std::vector<double> blockErrors(const std::vector<pf::Spectrum> &a, const std::vector<pf::Spectrum> &r) {
+    std::vector<double> e(a.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        for (int c = 0; c < 3; ++c) e[i] += (a[i][c] - r[i][c]) * (a[i][c] - r[i][c]) / (r[i][c] * r[i][c] + 1e-2);
+    return e;
+}
+
+struct MeanError {
+    double mean = 0, stderr_ = 0;
+};
+MeanError meanOf(const std::vector<double> &v) {
+    MeanError m;
+    m.mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+    if (v.size() > 1) {
+        double ss = 0;
+        for (const double x : v) ss += (x - m.mean) * (x - m.mean);
+        m.stderr_ = std::sqrt(ss / static_cast<double>(v.size() - 1) / static_cast<double>(v.size()));
+    }
+    return m;
+}
+
+pf::Bitmap render(const pf::Scene &scene, const std::string &type, int spp, uint64_t seed, int threads) {
+    const auto integrator = pf::createIntegrator(type, scene.integratorProperties(), false);
+    pf::RenderStats stats;
+    return bench::renderWith(scene, *integrator, spp, 0, seed, threads, stats);
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const bool hasValue = i + 1 < argc;
+        if (a == "--res" && hasValue)
+            o.res = std::stoi(argv[++i]);
+        else if (a == "--spp" && hasValue)
+            o.spp = std::stoi(argv[++i]);
+        else if (a == "--seeds" && hasValue)
+            o.seeds = std::max(1, std::stoi(argv[++i]));
+        else if (a == "--ref-spp" && hasValue)
+            o.refSpp = std::stoi(argv[++i]);
+        else if (a == "--reference" && hasValue)
+            o.reference = argv[++i];
+        else if (a == "--block" && hasValue)
+            o.block = std::max(1, std::stoi(argv[++i]));
+        else if (a == "--worst" && hasValue)
+            o.worst = std::stoi(argv[++i]);
+        else if (a == "--threads" && hasValue)
+            o.threads = std::stoi(argv[++i]);
+        else if (a == "--integrators" && hasValue) {
+            o.integrators.clear();
+            std::stringstream list(argv[++i]);
+            for (std::string name; std::getline(list, name, ',');) o.integrators.push_back(name);
+        } else
+            o.scene = a;
+    }
+    auto scene = pf::loadScene(o.scene);
+    scene->resizeFilm(o.res, o.res);
+    const pf::Bitmap reference =
+        o.reference.empty() ? render(*scene, "bdpt", o.refSpp, 1000, o.threads) : pf::readEXR(o.reference);
+    if (reference.width != o.res || reference.height != o.res) {
+        std::fprintf(stderr, "the reference is %d x %d, the renders %d x %d\n", reference.width, reference.height,
+                     o.res, o.res);
+        return 2;
+    }
+    std::printf(
+        "%s at %d x %d, %d spp, seeds 1..%d, %d threads; reference: %s\n", o.scene.c_str(), o.res, o.res, o.spp,
+        o.seeds, o.threads,
+        o.reference.empty() ? ("pathfarm bdpt, " + std::to_string(o.refSpp) + " spp").c_str() : o.reference.c_str());
+    const std::vector<pf::Spectrum> refBlocks = blockMeans(reference, o.block);
+    std::printf("%-8s %24s %24s\n", "", "relMSE (pixels)",
+                ("relMSE (" + std::to_string(o.block) + "^2 blocks)").c_str());
+
+    std::vector<double> worstErrors;       // first integrator: block error summed over seeds
+    std::vector<pf::Spectrum> worstMeans;  // and its block means, averaged over seeds
+    for (const std::string &type : o.integrators) {
+        std::vector<double> pixel, block;
+        std::vector<double> sumErrors(refBlocks.size(), 0.0);
+        std::vector<pf::Spectrum> sumMeans(refBlocks.size(), pf::Spectrum(0.0));
+        for (int k = 1; k <= o.seeds; ++k) {
+            const pf::Bitmap image = render(*scene, type, o.spp, static_cast<uint64_t>(k), o.threads);
+            pixel.push_back(bench::relativeError(image, reference).all);
+            const std::vector<pf::Spectrum> means = blockMeans(image, o.block);
+            const std::vector<double> e = blockErrors(means, refBlocks);
+            block.push_back(std::accumulate(e.begin(), e.end(), 0.0) / (3.0 * static_cast<double>(e.size())));
+            for (size_t i = 0; i < e.size(); ++i) {
+                sumErrors[i] += e[i];
+                sumMeans[i] += means[i] / o.seeds;
+            }
+        }
+        const MeanError p = meanOf(pixel), b = meanOf(block);
+        std::printf("%-8s %12.4g +- %-9.2g %12.4g +- %-9.2g\n", type.c_str(), p.mean, p.stderr_, b.mean, b.stderr_);
+        if (worstErrors.empty()) {
+            worstErrors = sumErrors;
+            worstMeans = sumMeans;
+        }
+    }
+
+    // Where the first integrator's block error sits.
+    std::vector<size_t> order(worstErrors.size());
+    std::iota(order.begin(), order.end(), size_t(0));
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return worstErrors[a] > worstErrors[b]; });
+    const double total = std::accumulate(worstErrors.begin(), worstErrors.end(), 0.0);
+    const int perRow = o.res / o.block;
+    std::printf("%s: blocks with most of the block error (x, y in blocks; mean luminance)\n",
+                o.integrators.front().c_str());
+    for (int i = 0; i < std::min<int>(o.worst, static_cast<int>(order.size())); ++i) {
+        const size_t b = order[static_cast<size_t>(i)];
+        std::printf("  (%3d, %3d)  image %10.4g  reference %10.4g  share %5.1f%%\n", static_cast<int>(b) % perRow,
+                    static_cast<int>(b) / perRow, luminance(worstMeans[b]), luminance(refBlocks[b]),
+                    total > 0 ? 100.0 * worstErrors[b] / total : 0.0);
+    }
+    return 0;
+}
