@@ -71,7 +71,7 @@ void Reconnector::failed(const grpc::Status &s) {
                                                                 std::to_string(farm_.reconnectSeconds) +
                                                                 " s: " + s.error_message()));
     std::this_thread::sleep_for(std::min<Clock::duration>(backoff_, giveUp - now));
-    backoff_ = std::min<Clock::duration>(2 * backoff_, std::chrono::seconds(5));
+    backoff_ = std::min<Clock::duration>(2 * backoff_, std::chrono::seconds(2));
 }
 
 bool jobEnded(const v1::Job &j) {
