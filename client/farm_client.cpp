@@ -32,7 +32,10 @@ std::unique_ptr<grpc::ClientContext> FarmConnection::context(int timeoutSeconds)
     return ctx;
 }
 
-std::shared_ptr<grpc::Channel> FarmConnection::channel() const { return farm::makeChannel(master, tls, 64 << 20); }
+std::shared_ptr<grpc::Channel> FarmConnection::channel() const {
+    if (!channel_) channel_ = farm::makeChannel(master, tls, 64 << 20);
+    return channel_;
+}
 
 namespace {
 
@@ -70,7 +73,16 @@ void Reconnector::failed(const grpc::Status &s) {
         throw CallError(what_, grpc::Status(s.error_code(), "master still unreachable after " +
                                                                 std::to_string(farm_.reconnectSeconds) +
                                                                 " s: " + s.error_message()));
-    std::this_thread::sleep_for(std::min<Clock::duration>(backoff_, giveUp - now));
+    // Until the channel has connected again every call fails at once, so the wait is spent connecting.
+    // gRPC's own backoff between connection attempts has grown while the master was away: reset, it
+    // tries now. Waiting for the connection (rather than sleeping) also drives the channel: with no call
+    // under way, gRPC would see a connection attempt's outcome only every 5 s (its backup poller).
+    const Clock::duration wait = std::min<Clock::duration>(backoff_, giveUp - now);
+    const std::shared_ptr<grpc::Channel> channel = farm_.channel();
+    grpc::experimental::ChannelResetConnectionBackoff(channel.get());
+    // Connected at once (a master still shutting down may accept): a short pause all the same.
+    if (channel->WaitForConnected(std::chrono::system_clock::now() + wait))
+        std::this_thread::sleep_until(std::min(now + wait, now + std::chrono::milliseconds(250)));
     backoff_ = std::min<Clock::duration>(2 * backoff_, std::chrono::seconds(2));
 }
 

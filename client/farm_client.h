@@ -35,7 +35,12 @@ struct FarmConnection {
     std::string token() const;
     // A context carrying the token, with a deadline unless timeoutSeconds is 0.
     std::unique_ptr<grpc::ClientContext> context(int timeoutSeconds = 60) const;
+    // The channel to the master, made from the fields above on the first call and then shared by every
+    // stub made from it (and by the copies of this connection), so that reconnecting can hurry it.
     std::shared_ptr<grpc::Channel> channel() const;
+
+private:
+    mutable std::shared_ptr<grpc::Channel> channel_;
 };
 
 // Rides out a master restart or a dropped connection for a call that is safe to repeat: after a failed

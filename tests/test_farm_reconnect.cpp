@@ -18,6 +18,8 @@ using namespace std::chrono_literals;
 
 const std::string kSpec = "--spp 160 --seed 21";
 
+class FarmReconnect : public FarmTest {};
+
 // `pathfarm ARGS` for this farm as a process of its own, so that the test can restart the master
 // while the command runs.
 std::unique_ptr<Process> startCli(const Farm &farm, const std::vector<std::string> &args, const std::string &log) {
@@ -53,7 +55,7 @@ int exitCode(Process &p, std::chrono::seconds timeout) {
     return code.value_or(-1);
 }
 
-TEST_F(FarmTest, SubmitWaitWatchAndFetchRideOutMasterRestarts) {
+TEST_F(FarmReconnect, SubmitWaitWatchAndFetchRideOutMasterRestarts) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 128, 8);
     const std::string ref = farm->embeddedRender(scene, kSpec, "reference");
     farm->startMaster(kFastLeases);
@@ -85,7 +87,7 @@ TEST_F(FarmTest, SubmitWaitWatchAndFetchRideOutMasterRestarts) {
     EXPECT_TRUE(sameBits(ref, fetched));
 }
 
-TEST_F(FarmTest, MasterWithARelativeDataDirResumesFromAnotherWorkingDirectory) {
+TEST_F(FarmReconnect, MasterWithARelativeDataDirResumesFromAnotherWorkingDirectory) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 128, 8);
     const std::string ref = farm->embeddedRender(scene, kSpec, "reference");
     farm->setMasterDirectory(farm->dir(), "data");
@@ -104,7 +106,7 @@ TEST_F(FarmTest, MasterWithARelativeDataDirResumesFromAnotherWorkingDirectory) {
     EXPECT_TRUE(sameBits(ref, farm->dir() + "/farm.exr"));
 }
 
-TEST_F(FarmTest, ReconnectingEndsOnErrorsThatRepeatAndWhenItsTimeIsUp) {
+TEST_F(FarmReconnect, ReconnectingEndsOnErrorsThatRepeatAndWhenItsTimeIsUp) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 16, 1);
     farm->startMaster();
     const std::string id = std::to_string(submit(*farm, scene));  // no worker: it stays queued
@@ -114,15 +116,18 @@ TEST_F(FarmTest, ReconnectingEndsOnErrorsThatRepeatAndWhenItsTimeIsUp) {
     EXPECT_NE(unknownCode, 0);
     EXPECT_NE(unknown.find("error: watching job 99: no job 99"), std::string::npos) << unknown;
     EXPECT_EQ(unknown.find("reconnecting"), std::string::npos) << unknown;
-    const auto [refusedCode, refused] = farm->cli("fetch " + id + " -o x.exr --token-file " + farm->workerTokenFile());
+    const auto [refusedCode, refused] =
+        farm->cli("fetch " + id + " -o " + farm->dir() + "/refused.exr --token-file " + farm->workerTokenFile());
     EXPECT_NE(refusedCode, 0);
     EXPECT_NE(refused.find("wrong bearer token"), std::string::npos) << refused;
     EXPECT_EQ(refused.find("reconnecting"), std::string::npos) << refused;
 
-    // A master that does not come back within --reconnect-timeout: a clear error, non-zero exit.
+    // A master that does not come back within --reconnect-timeout: a clear error, non-zero exit. It is
+    // stopped with SIGTERM: its shutdown cancels the watch, which is no reason to give up either.
     auto watcher = startCli(*farm, {"watch", id, "--reconnect-timeout", "2"}, "watch");
     ASSERT_TRUE(waitUntil([&] { return watcher->log().find("queued") != std::string::npos; }, 30s)) << watcher->log();
-    farm->killMaster();
+    farm->master().signal(SIGTERM);
+    farm->master().wait(30s);
     EXPECT_EQ(exitCode(*watcher, 60s), 1) << watcher->log();
     EXPECT_NE(watcher->log().find("reconnecting for up to 2 s"), std::string::npos) << watcher->log();
     EXPECT_NE(watcher->log().find("error: watching job " + id + ": master still unreachable after 2 s"),
