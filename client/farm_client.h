@@ -43,11 +43,13 @@ private:
     mutable std::shared_ptr<grpc::Channel> channel_;
 };
 
-// Rides out a master restart or a dropped connection for a call that is safe to repeat: after a failed
-// attempt, `failed` waits (exponential backoff) when the failure means the master is unreachable and the
+// Rides out a master restart or a dropped connection for a call that is safe to repeat, made through a
+// stub of farm.channel(): after a failed attempt, `failed` waits for the channel to connect again (up to
+// a backoff doubling from 0.25 s to 2 s) when the failure means the master is unreachable and the
 // connection's reconnectSeconds have not passed since the master last answered, and throws CallError
 // otherwise. An unknown job, a refused token or a bad request fail the same way however often they are
-// tried, so they throw at once. The first wait of an outage says so on stderr.
+// tried, so they throw at once. The first wait of an outage says so on stderr, and so does the answer
+// that ends it.
 class Reconnector {
 public:
     Reconnector(const FarmConnection &farm, std::string what);
