@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "embedded_farm.h"
 #include "farm_client.h"
+#include "farm_commands.h"
 #include "farm_job.h"
 #include "image/bitmap.h"
 #include "image/metrics.h"
@@ -72,6 +73,8 @@ CompareCommand::CompareCommand(CLI::App &app) : a_(std::make_unique<Args>()) {
     c.add_option("--tls-ca", a.farm.tls.ca, "With --master: PEM CA to connect with TLS");
     c.add_option("--tls-cert", a.farm.tls.cert, "With --master: PEM client certificate (mTLS)");
     c.add_option("--tls-key", a.farm.tls.key, "With --master: PEM private key of --tls-cert");
+    // The embedded farm's connection never reconnects: its master does not restart.
+    addReconnectOption(c, a.farm.reconnectSeconds);
     c.add_option("--threads", a.threads, "Render threads of the embedded farm's worker (default: all cores)")
         ->check(CLI::PositiveNumber);
 }

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "core/error.h"
 #include "farm/bundle.h"
@@ -31,7 +32,70 @@ std::unique_ptr<grpc::ClientContext> FarmConnection::context(int timeoutSeconds)
     return ctx;
 }
 
-std::shared_ptr<grpc::Channel> FarmConnection::channel() const { return farm::makeChannel(master, tls, 64 << 20); }
+std::shared_ptr<grpc::Channel> FarmConnection::channel() const {
+    if (!channel_) channel_ = farm::makeChannel(master, tls, 64 << 20);
+    return channel_;
+}
+
+namespace {
+
+// UNAVAILABLE: no connection, or the connection broke (master killed, restarted, network cut).
+// CANCELLED: these calls are never cancelled by the client, so the master cancelled them (shutdown).
+bool masterUnreachable(grpc::StatusCode code) {
+    return code == grpc::StatusCode::UNAVAILABLE || code == grpc::StatusCode::CANCELLED;
+}
+
+}  // namespace
+
+Reconnector::Reconnector(const FarmConnection &farm, std::string what) : farm_(farm), what_(std::move(what)) {}
+
+void Reconnector::reached() {
+    if (!inOutage_) return;
+    inOutage_ = false;
+    const double seconds = std::chrono::duration<double>(Clock::now() - outageStart_).count();
+    std::fprintf(stderr, "reconnected to %s after %.1f s\n", farm_.master.c_str(), seconds);
+}
+
+void Reconnector::failed(const grpc::Status &s) {
+    if (farm_.reconnectSeconds <= 0 || !masterUnreachable(s.error_code())) throw CallError(what_, s);
+    const Clock::time_point now = Clock::now();
+    if (!inOutage_) {
+        inOutage_ = true;
+        outageStart_ = now;
+        // A restarted master listens again within a second or two; the cap keeps a long outage from
+        // being noticed late.
+        backoff_ = std::chrono::milliseconds(250);
+        std::fprintf(stderr, "master %s unreachable (%s); reconnecting for up to %d s\n", farm_.master.c_str(),
+                     s.error_message().c_str(), farm_.reconnectSeconds);
+    }
+    const Clock::time_point giveUp = outageStart_ + std::chrono::seconds(farm_.reconnectSeconds);
+    if (now >= giveUp)
+        throw CallError(what_, grpc::Status(s.error_code(), "master still unreachable after " +
+                                                                std::to_string(farm_.reconnectSeconds) +
+                                                                " s: " + s.error_message()));
+    // Until the channel has connected again every call fails at once, so the wait is spent connecting.
+    // gRPC's own backoff between connection attempts has grown while the master was away: reset, it
+    // tries now. Waiting for the connection (rather than sleeping) also drives the channel: with no call
+    // under way, gRPC would see a connection attempt's outcome only every 5 s (its backup poller).
+    const Clock::duration wait = std::min<Clock::duration>(backoff_, giveUp - now);
+    const std::shared_ptr<grpc::Channel> channel = farm_.channel();
+    grpc::experimental::ChannelResetConnectionBackoff(channel.get());
+    // Connected at once (a master still shutting down may accept): a short pause all the same.
+    if (channel->WaitForConnected(std::chrono::system_clock::now() + wait))
+        std::this_thread::sleep_until(std::min(now + wait, now + std::chrono::milliseconds(250)));
+    backoff_ = std::min<Clock::duration>(2 * backoff_, std::chrono::seconds(2));
+}
+
+bool jobEnded(const v1::Job &j) {
+    return j.state() == v1::JOB_DONE || j.state() == v1::JOB_FAILED || j.state() == v1::JOB_CANCELLED;
+}
+
+void callReconnecting(const FarmConnection &farm, const std::string &what,
+                      const std::function<grpc::Status()> &attempt) {
+    Reconnector reconnect(farm, what);
+    for (grpc::Status s; !(s = attempt()).ok();) reconnect.failed(s);
+    reconnect.reached();
+}
 
 SceneBundle makeSceneBundle(const std::string &scenePath, const NameValues &defines) {
     if (!fs::is_regular_file(scenePath)) throw SceneError(scenePath + ": no such scene file");
@@ -73,15 +137,19 @@ void setParams(google::protobuf::RepeatedPtrField<v1::Param> &out, const NameVal
 FetchedImage fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id) {
     v1::FetchImageRequest req;
     req.set_id(id);
-    const auto ctx = farm.context(600);
-    auto reader = stub.FetchImage(ctx.get(), req);
-    v1::ImageChunk chunk;
     FetchedImage image;
-    while (reader->Read(&chunk)) {
-        if (chunk.has_info()) image.info = chunk.info();
-        image.exr += chunk.data();
-    }
-    check(reader->Finish(), "fetching the image of job " + std::to_string(id));
+    callReconnecting(farm, "fetching the image of job " + std::to_string(id), [&] {
+        const auto ctx = farm.context(600);
+        auto reader = stub.FetchImage(ctx.get(), req);
+        v1::ImageChunk chunk;
+        // A download cut off part way starts again from the first chunk.
+        image = FetchedImage();
+        while (reader->Read(&chunk)) {
+            if (chunk.has_info()) image.info = chunk.info();
+            image.exr += chunk.data();
+        }
+        return reader->Finish();
+    });
     if (image.exr.size() != image.info.size())
         throw std::runtime_error("the image of job " + std::to_string(id) + " arrived short");
     return image;

@@ -80,14 +80,17 @@ FarmCommands::FarmCommands(CLI::App &app) : a_(std::make_unique<Args>()) {
     a.submit->add_option("--label", a.label, "Text shown in listings");
     a.submit->add_flag("--wait", a.wait, "Wait for the job, printing progress, then fetch its image");
     a.submit->add_option("-o,--output", a.output, "With --wait: output EXR (default: named after the scene)");
+    addReconnectOption(*a.submit, a.reconnectSeconds);
 
     a.status = common(app.add_subcommand("status", "List jobs, or show one"));
     a.status->add_option("job", a.job, "Job id");
     a.watch = common(app.add_subcommand("watch", "Follow a job until it ends"));
     a.watch->add_option("job", a.job, "Job id")->required();
+    addReconnectOption(*a.watch, a.reconnectSeconds);
     a.fetch = common(app.add_subcommand("fetch", "Download a job's image (the running image if unfinished)"));
     a.fetch->add_option("job", a.job, "Job id")->required();
     a.fetch->add_option("-o,--output", a.output, "Output EXR")->required();
+    addReconnectOption(*a.fetch, a.reconnectSeconds);
     a.cancel = common(app.add_subcommand("cancel", "Cancel a job"));
     a.cancel->add_option("job", a.job, "Job id")->required();
     a.workers = common(app.add_subcommand("workers", "List the farm's workers"));
@@ -99,15 +102,26 @@ FarmCommands::~FarmCommands() = default;
 
 namespace {
 
-// Follows a job through WatchJob, printing a line per change; returns the job as it ended.
-v1::Job follow(v1::ClientService::Stub &stub, int64_t id, std::unique_ptr<grpc::ClientContext> ctx) {
+// Follows a job through WatchJob, printing a line per change; returns the job as it ended. A watch cut
+// off by the master's restart is opened again: it starts with the job's current state.
+v1::Job follow(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id) {
     v1::WatchJobRequest req;
     req.set_id(id);
-    auto reader = stub.WatchJob(ctx.get(), req);
+    Reconnector reconnect(farm, "watching job " + std::to_string(id));
     v1::Job job;
-    while (reader->Read(&job)) std::fprintf(stderr, "%s\n", progressLine(job).c_str());
-    check(reader->Finish(), "watching job " + std::to_string(id));
-    return job;
+    for (;;) {
+        const auto ctx = farm.context(0);
+        auto reader = stub.WatchJob(ctx.get(), req);
+        while (reader->Read(&job)) {
+            reconnect.reached();
+            std::fprintf(stderr, "%s\n", progressLine(job).c_str());
+        }
+        grpc::Status s = reader->Finish();
+        // The master ends a watch early only when it goes away (a write to a closing server fails).
+        if (s.ok() && !jobEnded(job)) s = grpc::Status(grpc::StatusCode::UNAVAILABLE, "the watch ended before the job");
+        if (s.ok()) return job;
+        reconnect.failed(s);
+    }
 }
 
 void fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id, const std::string &output) {
@@ -118,6 +132,15 @@ void fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64
 }
 
 }  // namespace
+
+CLI::Option *addReconnectOption(CLI::App &cmd, int &seconds) {
+    seconds = 120;
+    return cmd
+        .add_option("--reconnect-timeout", seconds,
+                    "Seconds to keep reconnecting to a master that restarts or drops the connection (0: fail at once)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+}
 
 std::string defaultOutput(const std::string &scenePath) {
     const fs::path p(scenePath);
@@ -167,7 +190,7 @@ int FarmCommands::run() {
                         job.height(), job.integrator().c_str());
             std::fflush(stdout);
             if (!a.wait) return 0;
-            const v1::Job last = follow(*stub, job.id(), ctx(0));
+            const v1::Job last = follow(*stub, a, job.id());
             if (last.state() != v1::JOB_DONE) {
                 std::fprintf(stderr, "error: job %" PRId64 " %s%s%s\n", last.id(),
                              farm::stateName(last.state()).c_str(), last.error().empty() ? "" : ": ",
@@ -203,7 +226,7 @@ int FarmCommands::run() {
             return 0;
         }
         if (*a.watch) {
-            const v1::Job last = follow(*stub, a.job, ctx(0));
+            const v1::Job last = follow(*stub, a, a.job);
             return last.state() == v1::JOB_DONE ? 0 : 1;
         }
         if (*a.fetch) {

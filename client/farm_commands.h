@@ -12,6 +12,10 @@ namespace pf::client {
 // other.xml -> other.exr.
 std::string defaultOutput(const std::string &scenePath);
 
+// The --reconnect-timeout option of the commands that ride out a master restart, into `seconds`
+// (FarmConnection::reconnectSeconds), which it sets to the default.
+CLI::Option *addReconnectOption(CLI::App &cmd, int &seconds);
+
 class FarmCommands {
 public:
     explicit FarmCommands(CLI::App &app);

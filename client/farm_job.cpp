@@ -15,12 +15,8 @@ v1::Job getJob(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_
     v1::GetJobRequest req;
     req.set_id(id);
     v1::Job job;
-    check(stub.GetJob(farm.context().get(), req, &job), "job " + std::to_string(id));
+    callReconnecting(farm, "job " + std::to_string(id), [&] { return stub.GetJob(farm.context().get(), req, &job); });
     return job;
-}
-
-bool ended(const v1::Job &j) {
-    return j.state() == v1::JOB_DONE || j.state() == v1::JOB_FAILED || j.state() == v1::JOB_CANCELLED;
 }
 
 // Follows the job to its end, taking the snapshots.
@@ -31,7 +27,7 @@ v1::Job follow(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_
     const std::vector<double> &times = observer.snapshotTimes;
     size_t next = 0;
     v1::Job job;
-    while (!ended(job = getJob(stub, farm, id))) {
+    while (!jobEnded(job = getJob(stub, farm, id))) {
         if (next < times.size() && job.state() == v1::JOB_RUNNING && job.render_seconds() >= times[next]) {
             JobSnapshot s;
             try {

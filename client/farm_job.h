@@ -30,7 +30,9 @@ struct JobObserver {
 };
 
 // Submits `spec` and waits for it to end. Throws CallError for a rejected job and std::runtime_error for
-// a job that failed or was cancelled; a job abandoned by an exception is cancelled.
+// a job that failed or was cancelled; a job abandoned by an exception is cancelled. Following the job
+// and fetching its images ride out a master restart (farm.reconnectSeconds); the submission does not,
+// since repeating it could submit the job twice.
 FinishedJob runJob(pathfarm::v1::ClientService::Stub &stub, const FarmConnection &farm,
                    const pathfarm::v1::JobSpec &spec, const JobObserver &observer = {});
 

@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 
 #include "farm/health.h"
 #include "farm/rpc.h"
@@ -56,7 +57,7 @@ int run(const Args &a, pf::master::MasterConfig cfg) {
     builder.RegisterService(&health);
     const std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
     if (!server || port == 0) throw std::runtime_error("cannot listen on " + a.listen);
-    spdlog::info("listening on {} (port {}), data in {}, TLS {}", a.listen, port, a.data,
+    spdlog::info("listening on {} (port {}), data in {}, TLS {}", a.listen, port, master.config().dataDir,
                  a.tls.cert.empty() ? "off" : (a.tls.ca.empty() ? "on" : "on, client certificates required"));
     std::unique_ptr<pf::master::HttpStatus> status;
     if (!a.http.empty()) {
@@ -125,13 +126,16 @@ int main(int argc, char **argv) {
         return app.exit(e);
     }
     pf::farm::setupLogging("master", a.logLevel);
-    cfg.dataDir = a.data;
     cfg.leaseTime = std::chrono::milliseconds(a.leaseMs);
     cfg.heartbeat = std::chrono::milliseconds(a.heartbeatMs);
     cfg.checkpointInterval = std::chrono::milliseconds(a.checkpointMs);
     cfg.maxMessageBytes = a.maxMessageMiB << 20;
     cfg.maxBundleBytes = static_cast<uint64_t>(a.maxBundleMiB) << 20;
     try {
+        // The store records the paths of result and checkpoint files as they are made from the data
+        // directory; a relative one would name other files once the master restarts in another working
+        // directory (and fail the job it resumes).
+        cfg.dataDir = std::filesystem::weakly_canonical(std::filesystem::absolute(a.data)).string();
         return run(a, std::move(cfg));
     } catch (const std::exception &e) {
         spdlog::critical("{}", e.what());

@@ -31,9 +31,11 @@ namespace pf::test::farm {
 namespace fs = std::filesystem;
 namespace v1 = pathfarm::v1;
 
-Process::Process(const std::vector<std::string> &argv, const std::string &logFile) : logFile_(logFile) {
+Process::Process(const std::vector<std::string> &argv, const std::string &logFile, const std::string &cwd)
+    : logFile_(logFile) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
+    if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
     posix_spawn_file_actions_addopen(&actions, 1, logFile.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
     std::vector<char *> args;
@@ -149,7 +151,7 @@ std::string Farm::embeddedRender(const std::string &scene, const std::string &ar
     return out;
 }
 
-Farm::Farm(const std::string &name) : dir_(tempDir("farm-" + name)), port_(freePort()) {
+Farm::Farm(const std::string &name) : dir_(tempDir("farm-" + name)), port_(freePort()), masterData_(dir_ + "/data") {
     std::random_device rd;
     auto token = [&] {
         std::string t;
@@ -164,10 +166,10 @@ Farm::Farm(const std::string &name) : dir_(tempDir("farm-" + name)), port_(freeP
 
 Process &Farm::startMaster(const std::vector<std::string> &extraArgs) {
     std::vector<std::string> argv = {PATHFARM_MASTER_BIN, "--listen",     address(),         "--data",
-                                     dir_ + "/data",      "--token-file", clientTokenFile(), "--worker-token-file",
+                                     masterData_,         "--token-file", clientTokenFile(), "--worker-token-file",
                                      workerTokenFile()};
     argv.insert(argv.end(), extraArgs.begin(), extraArgs.end());
-    master_ = std::make_unique<Process>(argv, dir_ + "/master-" + std::to_string(masterStarts_++) + ".log");
+    master_ = std::make_unique<Process>(argv, dir_ + "/master-" + std::to_string(masterStarts_++) + ".log", masterCwd_);
     // Connecting before the port is open would put the channel into reconnect backoff.
     waitUntil([&] { return !master_->running() || master_->log().find("listening on") != std::string::npos; },
               std::chrono::seconds(30));

@@ -18,10 +18,11 @@
 
 namespace pf::test::farm {
 
-// A child process whose output goes to a log file. The destructor kills (SIGKILL) and reaps it.
+// A child process whose output goes to a log file, running in `cwd` ("": the test's own). The destructor
+// kills (SIGKILL) and reaps it.
 class Process {
 public:
-    Process(const std::vector<std::string> &argv, const std::string &logFile);
+    Process(const std::vector<std::string> &argv, const std::string &logFile, const std::string &cwd = "");
     ~Process();
     Process(const Process &) = delete;
     Process &operator=(const Process &) = delete;
@@ -74,6 +75,12 @@ public:
 
     // TLS files the test's own stubs use from now on (the processes get theirs as arguments).
     void useTls(const pf::farm::TlsFiles &tls) { tls_ = tls; }
+    // The masters started from now on run in `cwd` with `--data data` as given, which must name this
+    // farm's data directory from there (by default: in the test's directory, with an absolute path).
+    void setMasterDirectory(const std::string &cwd, const std::string &data) {
+        masterCwd_ = cwd;
+        masterData_ = data;
+    }
 
     // Starts the master on this farm's port and data directory and waits until it serves.
     Process &startMaster(const std::vector<std::string> &extraArgs = {});
@@ -102,6 +109,7 @@ private:
     int port_;
     std::string clientToken_, workerToken_;
     pf::farm::TlsFiles tls_;
+    std::string masterCwd_, masterData_;
     std::unique_ptr<Process> master_;
     std::vector<std::unique_ptr<Process>> workers_;
     int masterStarts_ = 0;
