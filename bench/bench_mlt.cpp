@@ -64,7 +64,7 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 pf::ChainImage runChains(const pf::Scene &scene, const pf::ChainIntegrator &integrator, int64_t spp,
                          double &chainSeconds) {
     std::vector<pf::SeedingResult> seeds;
-    for (const pf::SeedingTask &t : pf::seedingTasks(scene))
+    for (const pf::SeedingTask &t : integrator.seedingTasks(scene))
         seeds.push_back(pf::runSeedingTask(scene, integrator.seeding(scene), 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
     pf::ChainImage image(pf::makeFilmBlock(scene));

@@ -28,8 +28,7 @@ v1::TaskSpec Master::chainTaskWork(const ChainJob &job, uint64_t index) {
     v1::TaskSpec work;
     switch (job.phaseOf(index)) {
         case ChainJob::Phase::Seeding:
-            work.mutable_seeding()->set_first_pixel(job.seedingTask(index).firstPixel);
-            work.mutable_seeding()->set_pixel_count(job.seedingTask(index).pixelCount);
+            farm::toProto(job.seedingTask(index), *work.mutable_seeding());
             break;
         case ChainJob::Phase::Direct:
             work.mutable_image()->set_first_sample(job.directTask(index).firstSample);
@@ -57,7 +56,7 @@ void Master::openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &
     v1::ChainStats *stats = j.record.mutable_chain();
     if (stats->phase() == v1::CHAIN_PHASE_UNSPECIFIED) stats->set_phase(v1::CHAIN_PHASE_SEEDING);
     stats->set_seeding_tasks(job.seedingTaskCount());
-    stats->set_direct_tasks(job.directTaskCount());
+    stats->set_direct_tasks(static_cast<uint64_t>(job.directSamples()));
     stats->set_seeding_samples_per_pixel(j.seedingSpp);
     j.film.chain = std::move(state);
 }
@@ -67,6 +66,11 @@ uint64_t Master::maxSeedingPayloadBytes(const JobRuntime &j, const v1::TaskSpec 
     constexpr uint64_t kRecordBytes = 40, kMaxCandidatesPerSample = 256;
     return work.seeding().pixel_count() * static_cast<uint64_t>(j.seedingSpp) * kMaxCandidatesPerSample * kRecordBytes +
            (64 << 10);
+}
+
+bool Master::startsPass(const JobRuntime &j, int64_t index) {
+    if (!j.chain || index < j.chainFirst || !j.seeded) return false;
+    return j.film.chain->job->startsPass(static_cast<uint64_t>(index));
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -93,6 +97,8 @@ void Master::recordChainMerge(JobRuntime &j, uint64_t seedingSamples, uint64_t d
     stats->set_seeding_samples(stats->seeding_samples() + seedingSamples);
     stats->set_direct_samples(stats->direct_samples() + directSamples);
     stats->set_direct_samples_per_pixel(job.directSamplesPerPixel());
+    stats->set_passes(job.passesMerged());
+    stats->set_tasks_per_pass(job.tasksPerPass());
     farm::toProto(chains.counts, *stats->mutable_mutation_counts());
     farm::toProto(chains.counters, *stats->mutable_counters());
     if (job.seeded()) startChains(j);
@@ -102,15 +108,16 @@ void Master::startChains(JobRuntime &j) {
     if (j.seeded) return;
     const ChainJob &job = *j.film.chain->job;
     j.seeded = true;
-    const uint64_t count = job.chainTaskCount();
-    if (j.total == 0 && count != UINT64_MAX) j.total = j.chainFirst + static_cast<int64_t>(count);
+    const uint64_t count = job.taskCount();
+    if (j.total == 0 && count != UINT64_MAX) j.total = static_cast<int64_t>(count);
     v1::ChainStats *stats = j.record.mutable_chain();
     stats->set_phase(v1::CHAIN_PHASE_CHAINS);
     stats->set_luminance(job.normalizer().luminance());
     stats->set_candidates(job.normalizer().candidates().size());
-    spdlog::info("job={}: seeding merged: b = {:.6g} from {} candidates; {} chain tasks", j.record.id(),
+    spdlog::info("job={}: seeding merged: b = {:.6g} from {} candidates; {} chain and direct tasks", j.record.id(),
                  job.normalizer().luminance(), job.normalizer().candidates().size(),
-                 count == UINT64_MAX ? std::string("time budget decides the") : std::to_string(count));
+                 count == UINT64_MAX ? std::string("time budget decides the")
+                                     : std::to_string(count - static_cast<uint64_t>(j.chainFirst)));
     workChanged_.notify_all();
 }
 

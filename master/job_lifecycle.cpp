@@ -252,7 +252,12 @@ v1::Job Master::snapshot(const JobRuntime &j) const {
     } else if (j.total > 0) {
         progress = static_cast<double>(c->merged()) / static_cast<double>(j.total);
     } else if (job.started_unix_ms() > 0 && job.spec().budget().has_time_seconds()) {
-        progress = std::min(0.99, (unixMs() - job.started_unix_ms()) / 1000.0 / job.spec().budget().time_seconds());
+        // The clock's share of the budget, but never ahead of the work merged: a job whose tasks have not
+        // come back shows what it has, not 99%.
+        const double clock = (unixMs() - job.started_unix_ms()) / 1000.0 / job.spec().budget().time_seconds();
+        const double work =
+            j.tasks.empty() ? 0.0 : static_cast<double>(c->merged()) / static_cast<double>(j.tasks.size());
+        progress = std::min({0.99, clock, work});
     }
     job.set_progress(progress);
     if (job.state() == v1::JOB_RUNNING) job.set_render_seconds((unixMs() - job.started_unix_ms()) / 1000.0);

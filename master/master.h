@@ -191,6 +191,8 @@ private:
     // ---- chain_jobs.cpp: Markov-chain jobs ----
     // Task `index` of a chain job (chain tasks only once it is seeded), as the store and the workers see it.
     static pathfarm::v1::TaskSpec chainTaskWork(const ChainJob &job, uint64_t index);
+    // Whether task `index` of a chain job is the first of a pass (a time budget issues whole passes).
+    static bool startsPass(const JobRuntime &j, int64_t index);
     // openFilm for a chain job: the ChainJob that forms its tasks, and its figures in the record.
     void openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &integrator);
     // After a restart: merges the stored seeding results again and restores the checkpoint's direct

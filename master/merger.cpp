@@ -154,9 +154,7 @@ v1::CompleteReply Master::ignoreResult(const std::string &worker, int64_t attemp
 Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec &work, std::string_view payload) const {
     const Film &film = *j.film.film;
     const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
-    if (work.has_seeding())
-        return farm::decodeSeedingResult(payload, film,
-                                         SeedingTask{work.seeding().first_pixel(), work.seeding().pixel_count()});
+    if (work.has_seeding()) return farm::decodeSeedingResult(payload, film, farm::fromProto(work.seeding()));
     if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
     ImageBlock block = emptyBlock();
     farm::decodeBlock(payload, block);
@@ -171,6 +169,8 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     // apart), BDPT samples of seeding tasks, mutations of chain tasks.
     uint64_t samples = 0, seedingSamples = 0, directSamples = 0, mutations = 0, rays = 0;
     double seconds = 0, loadSeconds = 0;
+    // Burst tasks sample their own seeds (render/burst.h): those BDPT samples count as seeding.
+    const uint64_t burstSeedsBefore = f.chain ? f.chain->job->chains().seedSamples : 0;
     for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
         const auto t0 = Clock::now();
         const v1::TaskSpec &work = it->second.work;
@@ -196,6 +196,7 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
         ++f.merged;
     }
     if (f.merged == before) return;
+    if (f.chain) seedingSamples += f.chain->job->chains().seedSamples - burstSeedsBefore;
     const auto now = Clock::now();
     const bool complete = j.total > 0 && f.merged == j.total;
     {

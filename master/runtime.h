@@ -102,6 +102,7 @@ struct Master::JobRuntime {
     std::set<std::string> blocklist;
     double taskSeconds = 0;  // of accepted results that the time budget issues, for its estimate
     int64_t taskCount = 0;
+    int64_t passStartMs = 0;  // when the last pass's first task was issued (0: not since the start)
     int64_t failedAttempts = 0, expiredAttempts = 0;
     std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task
     bool filmOpen = false;                   // the film still holds memory or result files to release once the job ends

@@ -141,6 +141,7 @@ std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w
         // The chain job's tasks never change once issued: only its merged results and the normalizer,
         // which is immutable once `seeded`, are read here.
         t.work = chainTaskWork(*j.film.chain->job, static_cast<uint64_t>(index));
+        if (startsPass(j, index)) j.passStartMs = unixMs();
     } else {
         t.work.mutable_image()->set_first_sample(j.nextFirstSample);
         t.work.mutable_image()->set_sample_count(taskSize(j.record.spec(), j.nextFirstSample));
@@ -158,9 +159,14 @@ bool Master::mayIssue(JobRuntime &j) {
     if (j.total > 0) return issued < j.total;
     if (issued == j.chainFirst) return true;  // a time budget runs at least one task (of chains)
     // The clock decides whether another whole task is issued, never when one stops: issue while the
-    // expected end of a new task is within the budget.
+    // expected end of a new task is within the budget. Burst jobs are unbiased only over whole passes
+    // (render/burst.h): a pass once started is issued whole, and the next starts if the last one's time
+    // since its first task was issued (at least a task's time) still fits.
+    if (j.chain && !startsPass(j, issued)) return true;
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
-    const double estimate = j.taskCount > 0 ? j.taskSeconds / static_cast<double>(j.taskCount) : 0.0;
+    double estimate = j.taskCount > 0 ? j.taskSeconds / static_cast<double>(j.taskCount) : 0.0;
+    if (j.chain && j.film.chain->job->tasksPerPass() > 1 && j.passStartMs > 0)
+        estimate = std::max(estimate, (unixMs() - j.passStartMs) / 1000.0);
     if (elapsed + estimate <= j.record.spec().budget().time_seconds()) return true;
     j.total = static_cast<int64_t>(j.tasks.size());
     store_.saveJob(snapshot(j));

@@ -123,12 +123,13 @@ TEST(ChainTask, BudgetSplitsIntoFixedChains) {
     EXPECT_EQ(stats.samples % (1u << 14), 0u) << "a chain was cut by the clock";
 }
 
-// §2.5: long chains are normalized by b̂ / (total mutations) after summing; bursts are summed.
+// §2.5: long chains are normalized by b̂ / (total mutations) after summing; bursts are summed and divided by
+// the passes merged (integrators/erpt.h).
 TEST(ChainTask, MergeRules) {
     auto scene = loadChainTestScene("cornell-box", 4);
     const Film &film = scene->sensor().film();
     const auto result = [&](double value, uint64_t mutations) {
-        ChainResult r{makeFilmBlock(*scene), mutations, {{"a", mutations, mutations / 2}}, {}, 0, 1.0};
+        ChainResult r{makeFilmBlock(*scene), mutations, 0, {{"a", mutations, mutations / 2}}, {}, 0, 1.0};
         r.film.splat(Vec2(1.5, 2.5), Spectrum(value));
         return r;
     };
@@ -140,12 +141,20 @@ TEST(ChainTask, MergeRules) {
     EXPECT_EQ(image.counts[0].proposed, 400u);
     EXPECT_EQ(image.counts[0].accepted, 200u);
     EXPECT_DOUBLE_EQ(image.seconds, 2.0);
-    const Bitmap longChains = developChains(film, image, ChainKind::Long, 2.0);
-    EXPECT_FLOAT_EQ(longChains.get(1, 2).r, static_cast<float>(2.0 * 8.0 / 400.0));
-    EXPECT_EQ(longChains.get(2, 1).r, 0.0f);
-    EXPECT_FLOAT_EQ(developChains(film, image, ChainKind::Burst, 2.0).get(1, 2).g, 8.0f);
+    EXPECT_EQ(image.tasks, 2u);
+    const auto longChains = makeTestIntegrator(*scene, "pssmlt", {});
+    const auto &chains = dynamic_cast<const ChainIntegrator &>(*longChains);
+    const Bitmap developed = developChains(film, image, chains.chainImageScale(*scene, 0, image, 2.0));
+    EXPECT_FLOAT_EQ(developed.get(1, 2).r, static_cast<float>(2.0 * 8.0 / 400.0));
+    EXPECT_EQ(developed.get(2, 1).r, 0.0f);
+    // A 4x4 erpt render's pass is one task: two tasks are two passes, and the image is their mean.
+    const auto erpt = makeTestIntegrator(*scene, "erpt", {});
+    const auto &bursts = dynamic_cast<const ChainIntegrator &>(*erpt);
+    ASSERT_EQ(bursts.tasksPerPass(*scene, 0), 1u);
+    EXPECT_FLOAT_EQ(developChains(film, image, bursts.chainImageScale(*scene, 0, image, 2.0)).get(1, 2).g, 4.0f);
     ChainImage empty(makeFilmBlock(*scene));
-    EXPECT_EQ(developChains(film, empty, ChainKind::Long, 2.0).get(1, 2).b, 0.0f);
+    EXPECT_EQ(chains.chainImageScale(*scene, 0, empty, 2.0), 0.0);
+    EXPECT_EQ(bursts.chainImageScale(*scene, 0, empty, 2.0), 0.0);
 
     const ChainSeed burst{{}, 0.5};
     EXPECT_EQ(chainDepositScale(ChainKind::Long, burst, 100), 1.0);

@@ -61,6 +61,24 @@ INSTANTIATE_TEST_SUITE_P(Scenes, MEPTConvergence,
                                            Case{"pool", 32}, Case{"ring-caustic", 8, 16, 3, 4}),
                          [](const auto &info) { return gtestName(info.param.scene); });
 
+// The same under a wall-time budget of one second per render (`render --time`), on the scenes the
+// interleaving of passes and the stopping rule must not bias: whole passes while the clock allows.
+class MEPTTimeBudget : public ::testing::TestWithParam<Case> {};
+
+TEST_P(MEPTTimeBudget, AgreesWithBDPT) {
+    const Case &c = GetParam();
+    ConvergenceSetup s = timeBudgetSetup(1.0, c.maxDepth);
+    s.budget = c.budget;  // the scene's sampleCount: the rounds a time budget's passes are planned for
+    auto params = singleMutation(MutationType::Manifold);
+    params.emplace_back("numChains", std::to_string(c.chains) + ".0");
+    expectConvergence(c.scene, "erpt", params, s, c.scene + " mept --time 1");
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, MEPTTimeBudget,
+                         ::testing::Values(Case{"cornell-box", 8, 16, 0, 4}, Case{"veach-bidir", 8, 16, 0, 4},
+                                           Case{"ring-caustic", 8, 16, 3, 4}),
+                         [](const auto &info) { return gtestName(info.param.scene); });
+
 class MEMLTConvergence : public ::testing::TestWithParam<Case> {};
 
 // MEMLT: long chains with the bidirectional mutation and the manifold perturbation, set up as test_mlt's

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -65,8 +66,9 @@ struct BlockStats {
     std::vector<double> mean, stderr_;
 };
 
-inline BlockStats blockStats(const Scene &scene, const Integrator &integrator, int block, int seeds, int64_t spp,
-                             uint64_t seedBase, int threads = 2) {
+// The same over images that `render(seed)` returns, for renders that are not Integrator::render's.
+inline BlockStats blockStatsOf(const Scene &scene, int block, int seeds, uint64_t seedBase,
+                               const std::function<Bitmap(uint64_t seed)> &render) {
     const Film &film = scene.sensor().film();
     const int nx = film.cropWidth() / block, ny = film.cropHeight() / block;
     std::vector<double> sum(static_cast<size_t>(nx * ny * 3 + 1), 0.0), sum2(sum.size(), 0.0);
@@ -75,12 +77,7 @@ inline BlockStats blockStats(const Scene &scene, const Integrator &integrator, i
         sum2[i] += v * v;
     };
     for (int k = 0; k < seeds; ++k) {
-        RenderOptions opt;
-        opt.spp = spp;
-        opt.seed = seedBase + 7919 * static_cast<uint64_t>(k + 1);
-        opt.threads = threads;
-        RenderStats stats;
-        const Bitmap img = integrator.render(scene, opt, stats);
+        const Bitmap img = render(seedBase + 7919 * static_cast<uint64_t>(k + 1));
         for (int by = 0; by < ny; ++by)
             for (int bx = 0; bx < nx; ++bx)
                 for (int c = 0; c < 3; ++c)
@@ -95,6 +92,20 @@ inline BlockStats blockStats(const Scene &scene, const Integrator &integrator, i
         r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
     }
     return r;
+}
+
+// Renders with `spp` (or, with timeLimit > 0, under that wall-time budget in seconds).
+inline BlockStats blockStats(const Scene &scene, const Integrator &integrator, int block, int seeds, int64_t spp,
+                             uint64_t seedBase, int threads = 2, double timeLimit = 0) {
+    return blockStatsOf(scene, block, seeds, seedBase, [&](uint64_t seed) {
+        RenderOptions opt;
+        opt.spp = spp;
+        opt.seed = seed;
+        opt.threads = threads;
+        opt.timeLimit = timeLimit;
+        RenderStats stats;
+        return integrator.render(scene, opt, stats);
+    });
 }
 
 // Block means of `test` agree with `reference` within `sigmas` combined standard errors, and the errors

@@ -56,13 +56,9 @@ TEST_P(Seeding, LuminanceIsTheBDPTEstimateOfTheImageTotal) {
     ASSERT_GT(total, 0);
     EXPECT_NEAR(n.luminance(), total, 1e-6 * total);
 
-    double pools = 0, weights = 0, depths = 0;
-    const Film &film = scene->sensor().film();
-    for (uint64_t i = 0; i < static_cast<uint64_t>(film.cropWidth() * film.cropHeight()); ++i)
-        pools += n.pixelLuminance(filmPixel(film, i));
+    double weights = 0, depths = 0;
     for (const SeedCandidate &c : n.candidates()) weights += c.weight;
     for (double d : n.depthLuminance()) depths += d;
-    EXPECT_NEAR(pools, n.luminance(), 1e-12 * total);
     EXPECT_NEAR(weights, n.luminance(), 1e-12 * total);
     EXPECT_DOUBLE_EQ(depths, n.luminance());
 }
@@ -98,9 +94,7 @@ TEST_P(Seeding, CandidatesRegenerateExactly) {
 }
 
 // §2.4: long-chain starts are drawn with probability w_i / W (independently per task, stratified within
-// one); burst starts
-// of one pixel with probability w_i / W_p, each with weight W_p / C (§5.3). Pearson's chi-square over the
-// candidates (cells with small expectations pooled).
+// one). Pearson's chi-square over the candidates (cells with small expectations pooled).
 TEST_P(Seeding, ResamplingIsProportionalToWeight) {
     auto scene = loadChainTestScene(GetParam(), 8);
     const auto pssmlt = makeTestIntegrator(*scene, "pssmlt", {{"directSamples", "-1"}, {"luminanceSamples", "256"}});
@@ -132,33 +126,6 @@ TEST_P(Seeding, ResamplingIsProportionalToWeight) {
         const Chi2Result global = chi2Histogram(observed, expected, 0.01, 3);
         EXPECT_TRUE(global.passed) << perTask << " per task: " << global.report;
     }
-
-    // The pixel with the largest pool.
-    std::map<uint64_t, size_t> sizes;
-    for (const SeedCandidate &c : pool) ++sizes[c.record.pixel];
-    const uint64_t pixel =
-        std::max_element(sizes.begin(), sizes.end(), [](auto &a, auto &b) { return a.second < b.second; })->first;
-    ASSERT_GT(sizes[pixel], 5u);
-    const std::vector<ChainSeed> seeds = n.resamplePixel(kSeed, pixel, kDraws);
-    ASSERT_EQ(seeds.size(), static_cast<size_t>(kDraws));
-    std::fill(observed.begin(), observed.end(), 0.0);
-    std::fill(expected.begin(), expected.end(), 0.0);
-    const double W = n.pixelLuminance(pixel);
-    for (const ChainSeed &s : seeds) {
-        EXPECT_DOUBLE_EQ(s.weight, W / kDraws);
-        observed[indexOf(s.record)] += 1;
-    }
-    for (size_t i = 0; i < pool.size(); ++i)
-        if (pool[i].record.pixel == pixel) expected[i] = kDraws * pool[i].weight / W;
-    std::vector<double> o, e;
-    for (size_t i = 0; i < pool.size(); ++i)
-        if (expected[i] > 0 || observed[i] > 0) {
-            o.push_back(observed[i]);
-            e.push_back(expected[i]);
-        }
-    const Chi2Result perPixel = chi2Histogram(o, e, 0.01, 3);
-    EXPECT_TRUE(perPixel.passed) << perPixel.report;
-    EXPECT_TRUE(n.resamplePixel(kSeed, filmPixel(scene->sensor().film(), 0) + 1000000, 4).empty());
 }
 
 // A chain starts on its candidate: PSSMLT's target there is the luminance of the candidate's whole BDPT

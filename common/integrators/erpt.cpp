@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "render/normalizer.h"
 #include "scene/scene.h"
@@ -12,17 +13,6 @@ namespace {
 
 // The stream of the rounding of chain counts, apart from every other generator of the job.
 constexpr uint64_t kChainCountStream = 0xe127ULL;
-
-// The crop window split into a fixed number of pixel blocks (16, or fewer for tiny films, more for large
-// ones so that no block exceeds 16384 pixels), independent of the thread count.
-uint64_t cropPixels(const Scene &scene) {
-    const Film &film = scene.sensor().film();
-    return static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
-}
-uint64_t blockCount(const Scene &scene) {
-    const uint64_t pixels = cropPixels(scene);
-    return std::min(pixels, std::max<uint64_t>(16, (pixels + 16383) / 16384));
-}
 
 }  // namespace
 
@@ -35,52 +25,65 @@ ERPT::ERPT(const Properties &props, bool manifoldExploration)
     numChains_ = props.getFloat("numChains", 1.0);
     maxChains_ = props.getInt("maxChains", 0);
     chainLength_ = props.getInt("chainLength", 100);
-    // Mitsuba estimates the mean pixel luminance W with a separate pass of this many samples; here W comes
-    // from the seeding itself, and the parameter is only checked, so that Mitsuba's scenes load.
-    if (props.getInt("luminanceSamples", 15000) < 1) props.fail("luminanceSamples", "must be at least 1");
-    if (!(numChains_ > 0)) props.fail("numChains", "must be positive");
+    luminanceSamples_ = props.getInt("luminanceSamples", 15000);
+    passMutations_ = props.getInt("passMutations", kDefaultPassMutations);
+    if (passMutations_ < 1) props.fail("passMutations", "must be at least 1");
+    if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
+    if (!(numChains_ > 0) || !std::isfinite(numChains_)) props.fail("numChains", "must be positive");
     if (maxChains_ < 0) props.fail("maxChains", "must be 0 (no cap) or positive");
     if (chainLength_ < 1) props.fail("chainLength", "must be at least 1");
 }
 
-SeedingConfig ERPT::seeding(const Scene &scene, int64_t spp) const {
-    return seedingWith(spp > 0 ? spp : scene.sensor().sampleCount());
+SeedingConfig ERPT::seeding(const Scene &, int64_t) const { return seedingWith(1); }
+
+std::vector<SeedingTask> ERPT::seedingTasks(const Scene &) const {
+    return {SeedingTask{0, 0, static_cast<uint64_t>(luminanceSamples_)}};
 }
 
-double ERPT::expectedChains(double candidateWeight, double meanLuminance) const {
-    const double nu = numChains_ * candidateWeight / meanLuminance;
+BurstPlan ERPT::plan(const Scene &scene, int64_t spp) const {
+    const int64_t rounds = spp > 0 ? spp : std::max(1, scene.sensor().sampleCount());
+    return burstPlan(scene, numChains_ / static_cast<double>(rounds), chainLength_, passMutations_);
+}
+
+double ERPT::expectedChains(double candidateWeight, double meanLuminance, double chainsPerPixel) const {
+    const double nu = meanLuminance > 0 ? chainsPerPixel * candidateWeight / meanLuminance : chainsPerPixel;
     return maxChains_ > 0 ? std::min(nu, static_cast<double>(maxChains_)) : nu;
 }
 
-uint64_t ERPT::chainTaskCount(const Scene &scene, int64_t) const { return blockCount(scene); }
+uint64_t ERPT::chainTaskCount(const Scene &scene, int64_t spp) const {
+    return static_cast<uint64_t>(spp) * plan(scene, spp).tasksPerRound();
+}
 
-ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t,
+ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t, int64_t spp,
                           uint64_t index) const {
-    const Film &film = scene.sensor().film();
-    const uint64_t pixels = cropPixels(scene), blocks = blockCount(scene);
-    const double mean = normalizer.luminance() / static_cast<double>(pixels);
+    const BurstPlan p = plan(scene, spp);
     ChainTask task;
     task.index = index;
     task.mutations = static_cast<uint64_t>(chainLength_);
     task.depthLuminance = normalizer.depthLuminance();
-    // A time budget asks for tasks beyond the last block: the bursts of every pixel are all there is (the
-    // films are summed, so a second pass would count twice), and those tasks are empty.
-    if (index >= blocks) return task;
-    // The candidates that the block's pixels generated (the pool is in pixel order).
-    const std::vector<SeedCandidate> &pool = normalizer.candidates();
-    const uint64_t first = filmPixel(film, index * pixels / blocks),
-                   last = filmPixel(film, (index + 1) * pixels / blocks - 1);
-    const auto begin =
-        std::partition_point(pool.begin(), pool.end(), [&](const SeedCandidate &c) { return c.record.pixel < first; });
-    const auto end =
-        std::partition_point(begin, pool.end(), [&](const SeedCandidate &c) { return c.record.pixel <= last; });
-    PCG32 rng(hashCombine(seed, index), kChainCountStream);
-    for (auto c = begin; c != end; ++c) {
-        const double nu = expectedChains(c->weight, mean);
-        const int chains = static_cast<int>(std::floor(nu + rng.nextDouble()));
-        for (int k = 0; k < chains; ++k) task.seeds.push_back({c->record, c->weight / nu});
-    }
+    task.burst =
+        BurstPass{index / p.blocks, index % p.blocks, normalizer.luminance() / static_cast<double>(p.pixels), p};
     return task;
+}
+
+std::vector<ChainSeed> ERPT::taskSeeds(const Scene &scene, uint64_t seed, const ChainTask &task,
+                                       uint64_t &seedSamples) const {
+    if (!task.burst) throw std::logic_error("an erpt chain task without its pass");
+    const BurstPass &b = *task.burst;
+    const double coverage = static_cast<double>(b.plan.interleave);
+    PCG32 rng(hashCombine(seed, task.index), kChainCountStream);
+    std::vector<ChainSeed> seeds;
+    for (const SeedCandidate &c : burstCandidates(scene, seeding(scene), seed, b, seedSamples)) {
+        // A pass covers the pixel with probability 1/m, so the seed stands for m w (render/burst.h).
+        const double nu = expectedChains(c.weight, b.meanLuminance, b.plan.chainsPerPixel);
+        const int chains = static_cast<int>(std::floor(nu + rng.nextDouble()));
+        for (int k = 0; k < chains; ++k) seeds.push_back({c.record, coverage * c.weight / nu});
+    }
+    return seeds;
+}
+
+double ERPT::chainImageScale(const Scene &scene, int64_t spp, const ChainImage &image, double) const {
+    return image.tasks > 0 ? static_cast<double>(tasksPerPass(scene, spp)) / static_cast<double>(image.tasks) : 0.0;
 }
 
 }  // namespace pf

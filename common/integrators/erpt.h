@@ -5,21 +5,24 @@
 // represent the image already, and each perturbation keeps that distribution (ALGORITHMS.md §5.2, §2.4).
 //
 // Energy per deposit (ALGORITHMS.md §5.3, Cline's bookkeeping): a seed of weight w launches
-// nu = numChains * w / W chains on average (W the mean pixel luminance, b̂ / pixels; nu at most maxChains
-// when that is positive), floor(nu + U) with U uniform, each of weight w / nu. Every deposit then carries
-// W / (numChains * chainLength) (more where the cap applies), on average numChains chains start per pixel,
-// and each seed's expected total stays w. Seeds launch their own chains rather than drawing them from their
-// pixel's pool: a pixel's pool also holds the light-tracing paths its samples splatted elsewhere, and a
-// burst resampled from it would carry the whole pixel's energy to wherever such a path lands. The bursts'
-// films are summed.
+// nu = numChains * w / W chains on average (W the mean pixel luminance from the luminance pilot,
+// render/pilot.h; nu at most maxChains when that is positive), floor(nu + U) with U uniform, each of weight
+// w / nu. Every deposit then carries W / (numChains * chainLength) (more where the cap applies), on average
+// numChains chains start per pixel and seed sample, and each seed's expected total stays w, for any W > 0
+// that does not depend on the seeds. Seeds launch their own chains rather than drawing them from their
+// pixel's samples: a pixel sample also holds light-tracing paths that land elsewhere, and a burst drawn
+// from the pixel would carry the whole pixel's energy to wherever such a path lands. Tasks are (pass,
+// block) pairs that sample their seeds themselves (render/burst.h), and the image is the mean of whole
+// passes.
 //
 // Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
 // numChains (1), maxChains (0: no cap on the chains of one seed), chainLength (100), lensPerturbation (true),
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
 // (false), manifoldPerturbation (false), lambda (50), manifoldGlossyAngle (1),
-// luminanceSamples (15000; Mitsuba's pass for W, which here comes from the seeding, so it is only checked);
-// see integrators/mlt.h for those shared with mlt. --spp is seed samples per pixel (default: the scene's
-// sampleCount; see seeding()).
+// luminanceSamples (15000: the pilot's BDPT samples); see integrators/mlt.h for those shared with mlt. Beyond
+// Mitsuba: passMutations (2^20), the expected mutations of one pass (render/burst.h), the step in which a
+// time budget is spent.
+// --spp is seed samples per pixel (rounds of render/burst.h; default: the scene's sampleCount).
 //
 // `mept` (manifold exploration path tracing, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the
 // manifold perturbation, which subsumes the lens, caustic and multi-chain perturbations, on by default in
@@ -35,22 +38,34 @@ public:
     explicit ERPT(const Properties &props, bool manifoldExploration = false);
     std::string name() const override { return manifoldExploration_ ? "mept" : "erpt"; }
     ChainKind chainKind() const override { return ChainKind::Burst; }
-    // The pool: `spp` BDPT samples per pixel (--spp), or the scene's sampleCount when spp is 0 (Mitsuba:
-    // "the size of this pool is given by the samplesPerPixel parameter of the sample generator").
+    // The seeding BDPT of the pilot and of every burst task (one sample per covered pixel and pass).
     SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
-    // A task is a block of pixels, each with its bursts. The budget is the seeding's (seeding() above), and
-    // under a time budget (spp = 0) the tasks after the last block are empty.
+    // The luminance pilot alone.
+    std::vector<SeedingTask> seedingTasks(const Scene &scene) const override;
+    // `spp` rounds of the plan's passes (0: a time budget, unbounded).
     uint64_t chainTaskCount(const Scene &scene, int64_t spp) const override;
+    // Task `index` is block index % blocks of pass index / blocks, with the pilot's W.
     ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                         uint64_t index) const override;
+    // The task's seed candidates (render/burst.h), each launching floor(nu + U) bursts of weight m w / nu.
+    std::vector<ChainSeed> taskSeeds(const Scene &scene, uint64_t seed, const ChainTask &task,
+                                     uint64_t &seedSamples) const override;
+    uint64_t tasksPerPass(const Scene &scene, int64_t spp) const override { return plan(scene, spp).blocks; }
+    // The mean over whole passes: 1 / passes (blocks / tasks while a pass is under way, for previews).
+    double chainImageScale(const Scene &scene, int64_t spp, const ChainImage &image, double luminance) const override;
 
-    // The expected number of chains nu of a seed of weight `candidateWeight` when the mean pixel luminance
-    // is `meanLuminance`.
-    double expectedChains(double candidateWeight, double meanLuminance) const;
+    // The passes of a render of `spp` rounds (0: a time budget, whose rounds are those of the scene's
+    // sampleCount): Mitsuba's numChains bursts per pixel over the whole render are numChains / rounds per
+    // round.
+    BurstPlan plan(const Scene &scene, int64_t spp) const;
+    // The expected number of chains nu of a seed of weight `candidateWeight` (one sample's) when the mean
+    // pixel luminance is `meanLuminance` and a round launches `chainsPerPixel` bursts per pixel on average
+    // (a pilot that saw no light, W = 0, gives every seed chainsPerPixel: still unbiased).
+    double expectedChains(double candidateWeight, double meanLuminance, double chainsPerPixel) const;
 
 private:
     double numChains_ = 1;
-    int64_t maxChains_ = 0, chainLength_ = 100;
+    int64_t maxChains_ = 0, chainLength_ = 100, luminanceSamples_ = 15000, passMutations_ = kDefaultPassMutations;
     bool manifoldExploration_ = false;
 };
 

@@ -6,32 +6,11 @@
 
 #include "image/film.h"
 #include "integrators/integrator.h"
+#include "integrators/progress_bar.h"
 #include "render/image_task.h"
 #include "scene/scene.h"
 
 namespace pf {
-
-namespace {
-
-class ProgressBar {
-public:
-    explicit ProgressBar(bool enabled) : enabled_(enabled) {}
-    void update(double fraction, const char *label) {
-        if (!enabled_) return;
-        const int width = 40, filled = static_cast<int>(clamp(fraction, 0.0, 1.0) * width);
-        std::fprintf(stderr, "\r[%.*s%*s] %5.1f%% %s", filled, "########################################",
-                     width - filled, "", 100.0 * clamp(fraction, 0.0, 1.0), label);
-        std::fflush(stderr);
-    }
-    ~ProgressBar() {
-        if (enabled_) std::fprintf(stderr, "\n");
-    }
-
-private:
-    bool enabled_;
-};
-
-}  // namespace
 
 Spectrum SamplingIntegrator::sample(const Scene &scene, Sampler &sampler, const Vec2 &raster, SplatList &) const {
     const Sensor &sensor = scene.sensor();

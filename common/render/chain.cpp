@@ -1,14 +1,18 @@
 // Chain tasks, and the embedded renderer of Markov-chain integrators: the tasks of a ChainJob (seeding,
-// the direct component, then waves of chain tasks, one task per core), merged in task order so that the
+// then passes of chain tasks with the direct component's tasks between them), merged in task order so that the
 // image does not depend on the thread count (ARCHITECTURE.md "A job, end to end").
 #include "render/chain.h"
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <map>
+#include <mutex>
 #include <optional>
 #include <thread>
 
+#include "integrators/progress_bar.h"
 #include "render/chain_job.h"
 #include "scene/scene.h"
 
@@ -41,23 +45,65 @@ void parallelFor(size_t n, int threads, const Fn &fn) {
     for (auto &t : pool) t.join();
 }
 
+// Runs run(i) for i in [0, n) on `threads` threads and hands each result to merge() in index order, as soon
+// as it and those before it are done. A task starts only while fewer than two per thread wait for their
+// turn, so at most 3 * threads results (films) are held, whatever n and however uneven the tasks.
+template <class Run, class Merge>
+void runOrdered(size_t n, int threads, const Run &run, const Merge &merge) {
+    using Result = decltype(run(size_t(0)));
+    std::mutex mu;
+    std::condition_variable cv;
+    std::map<size_t, Result> done;
+    size_t next = 0, merged = 0;
+    const size_t window = 2 * static_cast<size_t>(threads);
+    parallelFor(n, threads, [&](size_t) {
+        size_t i;
+        {
+            std::unique_lock<std::mutex> lock(mu);
+            cv.wait(lock, [&] { return next < merged + window; });
+            i = next++;
+        }
+        Result r = run(i);
+        std::unique_lock<std::mutex> lock(mu);
+        done.emplace(i, std::move(r));
+        // Whoever completes the next result in order merges it (and those after it that wait), under the lock.
+        for (auto it = done.find(merged); it != done.end(); it = done.find(merged)) {
+            merge(it->second);
+            done.erase(it);
+            ++merged;
+        }
+        cv.notify_all();
+    });
+}
+
 }  // namespace
 
 ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task) {
     const auto start = Clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
-    ChainResult result{makeFilmBlock(scene), 0, integrator.mutationTypes(), {}, 0, 0};
+    ChainResult result{makeFilmBlock(scene), 0, 0, integrator.mutationTypes(), {}, 0, 0};
+    const std::vector<ChainSeed> seeds = integrator.taskSeeds(scene, seed, task, result.seedSamples);
     PCG32 rng(hashCombine(seed, task.index), kChainStream);
-    for (const ChainSeed &s : task.seeds)
+    for (const ChainSeed &s : seeds)
         integrator.runChain(scene, seed, task, s, chainDepositScale(integrator.chainKind(), s, task.mutations), rng,
                             result.film, result.counts, result.counters);
-    result.mutations = task.mutations * task.seeds.size();
+    result.mutations = task.mutations * seeds.size();
     result.rays = Scene::threadRayCount() - rays0;
     result.seconds = secondsSince(start);
     return result;
 }
 
 uint64_t chainTaskMutations(const Scene &scene) { return std::max(kMinTaskMutations, cropPixels(scene)); }
+
+std::vector<SeedingTask> ChainIntegrator::seedingTasks(const Scene &scene) const { return pf::seedingTasks(scene); }
+
+std::vector<ChainSeed> ChainIntegrator::taskSeeds(const Scene &, uint64_t, const ChainTask &task, uint64_t &) const {
+    return task.seeds;
+}
+
+double ChainIntegrator::chainImageScale(const Scene &, int64_t, const ChainImage &image, double luminance) const {
+    return image.mutations > 0 ? luminance / static_cast<double>(image.mutations) : 0.0;
+}
 
 uint64_t ChainIntegrator::chainTaskCount(const Scene &scene, int64_t spp) const {
     const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), length = chainTaskMutations(scene);
@@ -90,7 +136,9 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
     const int64_t spp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
     ChainJob job(scene, *this, opt.seed, spp);
 
-    // The job's tasks in its merge order (render/chain_job.h): seeding, direct component, chains.
+    // The job's tasks in its merge order (render/chain_job.h): seeding first.
+    ProgressBar progress(opt.progress);
+    progress.update(0, "seeding");
     std::vector<SeedingResult> seeds(job.seedingTaskCount());
     parallelFor(seeds.size(), threads,
                 [&](size_t i) { seeds[i] = runSeedingTask(scene, job.seedingConfig(), opt.seed, job.seedingTask(i)); });
@@ -98,26 +146,51 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
         stats.rays += r.rays;
         job.mergeSeeding(std::move(r));
     }
-    for (uint64_t t = job.seedingTaskCount(); t < job.firstChainTask(); ++t) {
-        const ImageTaskResult r =
-            runImageTask(scene, *directIntegrator(), job.directSeed(), job.directTask(t), threads);
-        stats.rays += r.rays;
-        job.mergeDirect(r.block, job.directTask(t).sampleCount);
-    }
 
-    const uint64_t count = job.chainTaskCount();
-    double lastWave = 0;
-    for (uint64_t next = 0; next < count;) {
-        if (timed && next > 0 && secondsSince(start) + lastWave > opt.timeLimit) break;
-        const auto waveStart = Clock::now();
-        const size_t n = static_cast<size_t>(std::min<uint64_t>(static_cast<uint64_t>(threads), count - next));
-        std::vector<std::optional<ChainResult>> results(n);
-        parallelFor(n, threads, [&](size_t i) {
-            results[i] = runChainTask(scene, *this, opt.seed, job.chainTask(job.firstChainTask() + next + i));
-        });
-        for (const auto &r : results) job.mergeChain(*r);
-        next += n;
-        lastWave = secondsSince(waveStart);
+    // Then whole passes, each with the direct tasks before it (render/chain_job.h), in units of at least one
+    // chain task per core. Under a time budget the clock decides whether another unit starts, from the
+    // duration of the last one; a burst render is unbiased only over whole passes (render/burst.h).
+    const uint64_t count = job.taskCount();
+    const auto passEnd = [&](uint64_t t) {
+        for (++t; t < count && !job.startsPass(t);) ++t;
+        return t;
+    };
+    double lastUnit = 0;
+    for (uint64_t next = job.firstChainTask(); next < count;) {
+        if (timed && next > job.firstChainTask() && secondsSince(start) + lastUnit > opt.timeLimit) break;
+        const auto unitStart = Clock::now();
+        uint64_t end = next, chainTasks = 0;
+        while (end < count && chainTasks < static_cast<uint64_t>(threads)) {
+            const uint64_t e = passEnd(end);
+            for (uint64_t t = end; t < e; ++t) chainTasks += job.phaseOf(t) == ChainJob::Phase::Chain;
+            end = e;
+        }
+        std::vector<uint64_t> chainIndices;
+        for (uint64_t t = next; t < end; ++t) {
+            if (job.phaseOf(t) == ChainJob::Phase::Chain) {
+                chainIndices.push_back(t);
+                continue;
+            }
+            const ImageTask direct = job.directTask(t);
+            const ImageTaskResult r = runImageTask(scene, *directIntegrator(), job.directSeed(), direct, threads);
+            stats.rays += r.rays;
+            job.mergeDirect(r.block, direct.sampleCount);
+        }
+        runOrdered(
+            chainIndices.size(), threads,
+            [&](size_t i) { return runChainTask(scene, *this, opt.seed, job.chainTask(chainIndices[i])); },
+            [&](const ChainResult &r) { job.mergeChain(r); });
+        next = end;
+        lastUnit = secondsSince(unitStart);
+        char label[96];
+        std::snprintf(label, sizeof label, "%llu passes, %lld mutations/px, %lld direct spp, %.1f s",
+                      static_cast<unsigned long long>(job.passesMerged()),
+                      static_cast<long long>(job.mutationsPerPixel()),
+                      static_cast<long long>(job.directSamplesPerPixel()), secondsSince(start));
+        progress.update(timed ? secondsSince(start) / opt.timeLimit
+                              : static_cast<double>(next - job.firstChainTask()) /
+                                    static_cast<double>(count - job.firstChainTask()),
+                        label);
         if (opt.onPass) opt.onPass(job.mutationsPerPixel(), job.develop());
     }
     const ChainImage &image = job.chains();

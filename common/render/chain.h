@@ -11,11 +11,13 @@
 // rules.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "image/film.h"
 #include "integrators/integrator.h"
 #include "mcmc/metropolis.h"
+#include "render/burst.h"
 #include "render/seeding.h"
 
 namespace pf {
@@ -34,11 +36,14 @@ struct ChainTask {
     uint64_t mutations = 0;        // per chain, fixed in advance (§2.5: never cut by the clock)
     // The seeding's luminance per path depth; the sum is b̂. Chains with Kelemen's weights need it.
     std::vector<double> depthLuminance;
+    // Bursts: the pass and block whose seeds the task samples itself (render/burst.h); `seeds` is empty.
+    std::optional<BurstPass> burst;
 };
 
 struct ChainResult {
     ImageBlock film;  // unnormalized deposits (splats) over the crop window
     uint64_t mutations = 0;
+    uint64_t seedSamples = 0;  // BDPT samples a burst task took for its seeds
     MutationCounts counts;
     ChainCounters counters;  // further statistics (mcmc/metropolis.h), e.g. the manifold walks
     uint64_t rays = 0;
@@ -46,6 +51,7 @@ struct ChainResult {
 };
 
 class Normalizer;
+struct ChainImage;
 
 // Markov-chain integrators: seeding, then chains. render() is the embedded renderer (render/chain.cpp);
 // the farm calls the same pieces (seedingTasks/runSeedingTask, Normalizer, chainTask/runChainTask).
@@ -76,6 +82,19 @@ public:
     virtual ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                                 uint64_t index) const;
     virtual uint64_t chainsPerTask(const Scene &) const { return 1; }
+    // The seeding tasks of a job: by default blocks of pixels (render/seeding.h) whose candidates form the
+    // pool of chain starts; burst integrators run the luminance pilot alone (render/pilot.h).
+    virtual std::vector<SeedingTask> seedingTasks(const Scene &scene) const;
+    // The starts of a task's chains: its resampled seeds; burst tasks sample their own (render/burst.h),
+    // counting the BDPT samples that took in `seedSamples`.
+    virtual std::vector<ChainSeed> taskSeeds(const Scene &scene, uint64_t seed, const ChainTask &task,
+                                             uint64_t &seedSamples) const;
+    // Chain tasks per pass of a render of `spp` (as chainTaskCount): a time budget stops a render only
+    // between passes. Long chains: every task.
+    virtual uint64_t tasksPerPass(const Scene &, int64_t) const { return 1; }
+    // The factor that turns the merged chain films of a render of `spp` into the image
+    // (render/normalizer.h): long chains b̂ / (merged mutations), with b̂ = `luminance` from the seeding.
+    virtual double chainImageScale(const Scene &scene, int64_t spp, const ChainImage &image, double luminance) const;
 
     Bitmap render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const override;
 };

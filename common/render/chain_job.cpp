@@ -1,5 +1,6 @@
 #include "render/chain_job.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "scene/scene.h"
@@ -20,29 +21,78 @@ ChainJob::ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64
       seed_(seed),
       spp_(spp),
       config_(integrator.seeding(scene, spp)),
-      seedingTasks_(seedingTasks(scene)),
+      seedingTasks_(integrator.seedingTasks(scene)),
       direct_(makeFilmBlock(scene)),
       chains_(makeFilmBlock(scene)) {
-    // The direct component is rendered by its own integrator in the image tasks `render` would run for it.
-    if (integrator.directIntegrator() && integrator.directSamples() > 0)
-        for (int64_t first = 0; first < integrator.directSamples();
-             first += imageTaskSize(integrator.directSamples(), first))
-            directTasks_.push_back({first, imageTaskSize(integrator.directSamples(), first)});
+    if (integrator.directIntegrator() && integrator.directSamples() > 0) directSamples_ = integrator.directSamples();
+    // The pace of the direct component: its samples spread over the passes of the budget, or of a render
+    // of the scene's sampleCount under a time budget.
+    const int64_t paceSpp = spp > 0 ? spp : std::max(1, scene.sensor().sampleCount());
+    pacePasses_ =
+        std::max<uint64_t>(1, integrator.chainTaskCount(scene, paceSpp) / integrator.tasksPerPass(scene, paceSpp));
+}
+
+uint64_t ChainJob::passCount() const {
+    if (!seeded()) throw std::logic_error("chain tasks before the seeding is merged");
+    if (!(normalizer_->luminance() > 0)) return 0;
+    return spp_ > 0 ? integrator_.chainTaskCount(scene_, spp_) / tasksPerPass() : UINT64_MAX;
+}
+
+uint64_t ChainJob::directBefore(uint64_t pass) const {
+    const uint64_t d = static_cast<uint64_t>(directSamples_);
+    if (d == 0) return 0;
+    if (spp_ > 0 && pass >= passCount()) return d;
+    const uint64_t paced = ((pass + 1) * d + pacePasses_ - 1) / pacePasses_;
+    return spp_ > 0 ? std::min(d, paced) : paced;
+}
+
+uint64_t ChainJob::taskCount() const {
+    const uint64_t passes = passCount();
+    if (passes == UINT64_MAX) return UINT64_MAX;
+    return firstChainTask() + passes * tasksPerPass() + static_cast<uint64_t>(directSamples_);
+}
+
+ChainJob::Slot ChainJob::locate(uint64_t task) const {
+    if (!seeded() || task < firstChainTask() || task >= taskCount())
+        throw std::logic_error("no chain-phase task " + std::to_string(task));
+    const uint64_t j = task - firstChainTask(), perPass = tasksPerPass(), passes = passCount();
+    // The unit of pass k (its direct tasks, then its chain tasks) starts at k * perPass + directBefore(k - 1),
+    // which grows with k: the last k whose unit starts at or before j. With a finite budget, k = passes is
+    // the unit of the direct tasks left after the last pass.
+    const auto unitStart = [&](uint64_t k) { return k * perPass + (k > 0 ? directBefore(k - 1) : 0); };
+    uint64_t lo = 0, hi = passes == UINT64_MAX ? j / perPass + 1 : passes;
+    while (lo < hi) {
+        const uint64_t mid = lo + (hi - lo + 1) / 2;
+        if (unitStart(mid) <= j)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    const uint64_t k = lo, firstChain = k * perPass + directBefore(k);
+    if (j < firstChain) return {Phase::Direct, j - k * perPass, k};
+    return {Phase::Chain, j - directBefore(k), k};
 }
 
 ChainJob::Phase ChainJob::phaseOf(uint64_t task) const {
-    return task < seedingTaskCount() ? Phase::Seeding : task < firstChainTask() ? Phase::Direct : Phase::Chain;
+    return task < firstChainTask() ? Phase::Seeding : locate(task).phase;
 }
 
-uint64_t ChainJob::chainTaskCount() const {
-    if (!seeded()) throw std::logic_error("chain tasks before the seeding is merged");
-    if (!(normalizer_->luminance() > 0)) return 0;
-    return spp_ > 0 ? integrator_.chainTaskCount(scene_, spp_) : UINT64_MAX;
+ImageTask ChainJob::directTask(uint64_t task) const {
+    const Slot s = locate(task);
+    if (s.phase != Phase::Direct) throw std::logic_error("task " + std::to_string(task) + " is no direct task");
+    return {static_cast<int64_t>(s.ordinal), 1};
 }
 
 ChainTask ChainJob::chainTask(uint64_t task) const {
-    if (!seeded() || task < firstChainTask()) throw std::logic_error("no chain task " + std::to_string(task));
-    return integrator_.chainTask(scene_, *normalizer_, seed_, spp_, task - firstChainTask());
+    const Slot s = locate(task);
+    if (s.phase != Phase::Chain) throw std::logic_error("task " + std::to_string(task) + " is no chain task");
+    return integrator_.chainTask(scene_, *normalizer_, seed_, spp_, s.ordinal);
+}
+
+bool ChainJob::startsPass(uint64_t task) const {
+    const Slot s = locate(task);
+    const uint64_t j = task - firstChainTask(), perPass = tasksPerPass();
+    return j == s.pass * perPass + (s.pass > 0 ? directBefore(s.pass - 1) : 0);
 }
 
 void ChainJob::mergeSeeding(SeedingResult result) {
@@ -73,7 +123,8 @@ int64_t ChainJob::mutationsPerPixel() const {
 
 Bitmap ChainJob::develop() const {
     const Film &film = scene_.sensor().film();
-    Bitmap image = developChains(film, chains_, integrator_.chainKind(), seeded() ? normalizer_->luminance() : 0.0);
+    Bitmap image = developChains(
+        film, chains_, integrator_.chainImageScale(scene_, spp_, chains_, seeded() ? normalizer_->luminance() : 0.0));
     if (directSpp_ > 0) {
         // As the direct integrator's own render develops it (render_loop.cpp), then added.
         const Bitmap direct = film.develop(direct_, 1.0 / static_cast<double>(directSpp_));

@@ -1,9 +1,17 @@
-// A Markov-chain render as one list of tasks in merge order (ARCHITECTURE.md "A job, end to end"):
-// the seeding tasks, then the image tasks of the direct component (Mitsuba's directSamples, rendered
-// without chains), then the chain tasks. The chain tasks can only be formed once every seeding task is
-// merged (they carry starts resampled from the whole pool, ALGORITHMS.md §2.4). The embedded renderer
+// A Markov-chain render as one list of tasks in merge order (ARCHITECTURE.md "A job, end to end"): the
+// seeding tasks, then passes of chain tasks, each pass preceded by the image tasks of the direct component
+// (Mitsuba's directSamples, rendered without chains, one sample per pixel each) that its share of the
+// budget asks for. The chain tasks can only be formed once every seeding task is merged (they carry starts
+// resampled from the whole pool, ALGORITHMS.md §2.4, or the pilot's W for bursts). The embedded renderer
 // (ChainIntegrator::render) and the farm's master both drive a ChainJob, so they form the same tasks and
 // merge each component in the same order, which gives the same bits wherever the tasks ran.
+//
+// Why the direct component is interleaved: at 1024² its 16 samples per pixel take minutes, so rendered
+// up front it would swallow a time budget before the first chain ran. Spread over the passes, the direct
+// samples issued after pass k are ceil((k + 1) · D / P) of D, P the passes of the render (under a time
+// budget, of a render of the scene's sampleCount; past those, the direct component keeps that pace), at
+// least one. A pass is the unit a time budget stops at (ChainIntegrator::tasksPerPass); any whole number
+// of direct samples and of passes gives an unbiased image.
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -20,30 +28,34 @@ uint64_t directComponentSeed(uint64_t jobSeed);
 
 class ChainJob {
 public:
-    // `spp` mutations per pixel (0: a time budget, where the clock decides how many chain tasks run).
+    // `spp` mutations per pixel (seed samples per pixel for bursts; 0: a time budget, where the clock
+    // decides how many passes run).
     ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, int64_t spp);
 
     const Scene &scene() const { return scene_; }
     const ChainIntegrator &integrator() const { return integrator_; }
     uint64_t seed() const { return seed_; }
 
-    // ---- the task list: [0, S) seeding, [S, S + D) direct component, [S + D, ...) chains ----
+    // ---- the task list: [0, S) seeding, then direct and chain tasks interleaved by pass ----
     enum class Phase { Seeding, Direct, Chain };
     uint64_t seedingTaskCount() const { return seedingTasks_.size(); }
-    uint64_t directTaskCount() const { return directTasks_.size(); }
-    uint64_t firstChainTask() const { return seedingTaskCount() + directTaskCount(); }
-    Phase phaseOf(uint64_t task) const;
+    uint64_t firstChainTask() const { return seedingTaskCount(); }
+    // The direct component's samples per pixel in a render of the budget (under a time budget: in one of
+    // the scene's sampleCount); 0 when there is none.
+    int64_t directSamples() const { return directSamples_; }
     const SeedingTask &seedingTask(uint64_t task) const { return seedingTasks_.at(task); }
     const SeedingConfig &seedingConfig() const { return config_; }
-    // The direct component's task `task` (a job task index in [S, S + D)) and the seed it renders with.
-    const ImageTask &directTask(uint64_t task) const { return directTasks_.at(task - seedingTaskCount()); }
     uint64_t directSeed() const { return directComponentSeed(seed_); }
-    // Chain tasks exist once seeded(): how many (0 when the pool carries no energy, UINT64_MAX under a time
-    // budget), and task `task` (a job task index >= S + D).
+    // Tasks after the seeding exist once seeded(): how many in all (UINT64_MAX under a time budget), the
+    // phase of task `task` (>= firstChainTask()), the direct component's task (one sample per pixel) and
+    // the chain task, and whether `task` is the first of a pass's tasks (its direct tasks included).
     bool seeded() const { return normalizer_.has_value(); }
     const Normalizer &normalizer() const { return *normalizer_; }
-    uint64_t chainTaskCount() const;
+    uint64_t taskCount() const;
+    Phase phaseOf(uint64_t task) const;
+    ImageTask directTask(uint64_t task) const;
     ChainTask chainTask(uint64_t task) const;
+    bool startsPass(uint64_t task) const;
 
     // ---- merging, each component in task order ----
     // The last seeding result builds the normalizer.
@@ -58,17 +70,32 @@ public:
     const ChainImage &chains() const { return chains_; }
     // Mutations per pixel merged so far.
     int64_t mutationsPerPixel() const;
+    // Chain tasks per pass (1 for long chains), and the whole passes merged so far.
+    uint64_t tasksPerPass() const { return integrator_.tasksPerPass(scene_, spp_); }
+    uint64_t passesMerged() const { return chains_.tasks / tasksPerPass(); }
     // The image so far: the developed chains (once seeded) plus the direct component.
     Bitmap develop() const;
 
 private:
+    // Where task `task` (>= firstChainTask()) lies: its phase and its ordinal among the direct or the chain
+    // tasks, with the pass it belongs to.
+    struct Slot {
+        Phase phase;
+        uint64_t ordinal, pass;
+    };
+    Slot locate(uint64_t task) const;
+    // The direct tasks issued before the chain tasks of pass k (all of them once k reaches the passes).
+    uint64_t directBefore(uint64_t pass) const;
+    uint64_t passCount() const;  // UINT64_MAX under a time budget
+
     const Scene &scene_;
     const ChainIntegrator &integrator_;
     uint64_t seed_;
     int64_t spp_;
     SeedingConfig config_;
     std::vector<SeedingTask> seedingTasks_;
-    std::vector<ImageTask> directTasks_;
+    int64_t directSamples_ = 0;
+    uint64_t pacePasses_ = 1;             // P: the passes over which the direct samples are spread
     std::vector<SeedingResult> seeding_;  // merged so far, until the normalizer takes them
     std::optional<Normalizer> normalizer_;
     ImageBlock direct_;

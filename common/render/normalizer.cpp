@@ -8,7 +8,6 @@ namespace {
 
 // Stream ids that keep the resampling generators apart from every other generator seeded by the job seed.
 constexpr uint64_t kResampleStream = 0x5e1ec7ULL;
-constexpr uint64_t kBurstStream = 0xb0257ULL;
 
 }  // namespace
 
@@ -43,38 +42,6 @@ std::vector<ChainSeed> Normalizer::resample(uint64_t seed, uint64_t taskIndex, u
     return seeds;
 }
 
-std::pair<size_t, size_t> Normalizer::pixelRange(uint64_t pixel) const {
-    const auto lo = std::partition_point(pool_.begin(), pool_.end(),
-                                         [&](const SeedCandidate &c) { return c.record.pixel < pixel; });
-    const auto hi =
-        std::partition_point(lo, pool_.end(), [&](const SeedCandidate &c) { return c.record.pixel == pixel; });
-    return {static_cast<size_t>(lo - pool_.begin()), static_cast<size_t>(hi - pool_.begin())};
-}
-
-double Normalizer::pixelLuminance(uint64_t pixel) const {
-    const auto [begin, end] = pixelRange(pixel);
-    double sum = 0;
-    for (size_t i = begin; i < end; ++i) sum += pool_[i].weight;
-    return sum;
-}
-
-std::vector<ChainSeed> Normalizer::resamplePixel(uint64_t seed, uint64_t pixel, int chains) const {
-    const auto [begin, end] = pixelRange(pixel);
-    const double total = pixelLuminance(pixel);
-    std::vector<ChainSeed> seeds;
-    if (!(total > 0)) return seeds;
-    PCG32 rng(hashCombine(seed, pixel), kBurstStream);
-    for (int k = 0; k < chains; ++k) {
-        // A linear scan over the pixel's few candidates, with the weights summed in the order of W_p.
-        const double target = rng.nextDouble() * total;
-        size_t i = begin;
-        double sum = pool_[i].weight;
-        while (sum <= target && i + 1 < end) sum += pool_[++i].weight;
-        seeds.push_back({pool_[i].record, total / chains});
-    }
-    return seeds;
-}
-
 double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutations) {
     return kind == ChainKind::Long ? 1.0 : seed.weight / static_cast<double>(mutations);
 }
@@ -82,15 +49,16 @@ double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutatio
 void mergeChainResult(ChainImage &image, const ChainResult &result) {
     image.film.merge(result.film);
     image.mutations += result.mutations;
+    image.tasks += 1;
+    image.seedSamples += result.seedSamples;
     addCounts(image.counts, result.counts);
     addCounters(image.counters, result.counters);
     image.rays += result.rays;
     image.seconds += result.seconds;
 }
 
-Bitmap developChains(const Film &film, const ChainImage &image, ChainKind kind, double luminance) {
-    if (kind == ChainKind::Burst) return film.develop(image.film, 1.0);
-    return film.develop(image.film, image.mutations > 0 ? luminance / static_cast<double>(image.mutations) : 0.0);
+Bitmap developChains(const Film &film, const ChainImage &image, double scale) {
+    return film.develop(image.film, scale);
 }
 
 }  // namespace pf

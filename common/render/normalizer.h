@@ -8,9 +8,8 @@
 // independently (generators seeded by (job seed, task index)), so the starts do not depend on how many
 // tasks a time budget lets run. Each of the K long chains then carries weight W / K, which the long-chain rule
 // applies at merge time: image = b̂ * (sum of films) / (sum of mutations), with b̂ = W from the same pool,
-// which makes the image exactly unbiased for any fixed chain lengths. Bursts (§5.3) draw C chains from the
-// pool of one pixel and give each the weight W_p / C, W_p the pixel's luminance estimate; their films are
-// summed.
+// which makes the image exactly unbiased for any fixed chain lengths. Bursts (§5.3) have no pool: their
+// tasks sample their own seeds (render/burst.h), and the image is the mean of whole passes' films.
 #pragma once
 #include <cstdint>
 #include <utility>
@@ -34,17 +33,10 @@ public:
     // The starts of the `count` long chains of task `taskIndex` (weight 1: the merge rule applies W / K);
     // none when the pool carries no energy.
     std::vector<ChainSeed> resample(uint64_t seed, uint64_t taskIndex, uint64_t count) const;
-    // W_p: the luminance estimate of film pixel `pixel` from its own candidates (those it generated,
-    // light-tracing ones included).
-    double pixelLuminance(uint64_t pixel) const;
-    // `chains` burst starts from the pool of film pixel `pixel`, each with weight W_p / chains; empty when
-    // the pixel's pool carries no energy.
-    std::vector<ChainSeed> resamplePixel(uint64_t seed, uint64_t pixel, int chains) const;
 
 private:
     // Index into pool_ of the candidate at cumulative weight `target`.
     size_t find(double target) const;
-    std::pair<size_t, size_t> pixelRange(uint64_t pixel) const;
 
     std::vector<SeedCandidate> pool_;
     std::vector<double> cumulative_;  // cumulative_[i] = sum of the weights before candidate i (size + 1)
@@ -57,6 +49,8 @@ struct ChainImage {
     explicit ChainImage(ImageBlock empty) : film(std::move(empty)) {}
     ImageBlock film;
     uint64_t mutations = 0;
+    uint64_t tasks = 0;        // chain task results merged
+    uint64_t seedSamples = 0;  // BDPT samples burst tasks took for their seeds
     MutationCounts counts;
     ChainCounters counters;
     uint64_t rays = 0;
@@ -67,7 +61,7 @@ struct ChainImage {
 double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutations);
 // Adds a task's result. Tasks merged in the same order give the same bits.
 void mergeChainResult(ChainImage &image, const ChainResult &result);
-// The normalized image: long chains b̂ * films / mutations, bursts the sum.
-Bitmap developChains(const Film &film, const ChainImage &image, ChainKind kind, double luminance);
+// The normalized image: the films times `scale` (ChainIntegrator::chainImageScale).
+Bitmap developChains(const Film &film, const ChainImage &image, double scale);
 
 }  // namespace pf

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "render/pilot.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -38,6 +39,7 @@ std::vector<SeedingTask> seedingTasks(const Scene &scene) {
 }
 
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task) {
+    if (task.pilotSamples > 0) return runPilot(scene, config, seed, task.pilotSamples);
     const auto start = std::chrono::steady_clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
     const Film &film = scene.sensor().film();

@@ -32,10 +32,13 @@ struct SeedingConfig {
     int minDepth = 1;
 };
 
-// Crop-window pixels [firstPixel, firstPixel + pixelCount) in row-major order.
+// Crop-window pixels [firstPixel, firstPixel + pixelCount) in row-major order; or, when pilotSamples > 0,
+// the luminance pilot of burst rendering (render/pilot.h), which takes that many samples over the whole
+// crop window and returns no candidates.
 struct SeedingTask {
     uint64_t firstPixel = 0;
     uint64_t pixelCount = 0;
+    uint64_t pilotSamples = 0;
 };
 
 struct SeedingResult {
@@ -49,6 +52,7 @@ struct SeedingResult {
 // The fixed split of the crop window into seeding tasks, shared by the embedded renderer and the farm.
 std::vector<SeedingTask> seedingTasks(const Scene &scene);
 
+// The task's pixels, or the pilot when it is one.
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task);
 
 // The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.

@@ -70,6 +70,7 @@ v1::ChainOutput chainOutput(const Figures &r) {
     toProto(r.counters, *out.mutable_counters());
     out.set_rays(r.rays);
     out.set_seconds(r.seconds);
+    out.set_seed_samples(r.seedSamples);
     return out;
 }
 
@@ -81,6 +82,7 @@ void readChainOutput(const v1::ChainOutput &in, Figures &r) {
     r.counters = fromProto(in.counters());
     r.rays = in.rays();
     r.seconds = in.seconds();
+    r.seedSamples = in.seed_samples();
 }
 
 }  // namespace
@@ -91,6 +93,15 @@ v1::ChainTask toProto(const ChainTask &task) {
     for (const ChainSeed &s : task.seeds) addRecord(*out.mutable_seeds(), s.record, s.weight);
     out.set_mutations(task.mutations);
     for (const double l : task.depthLuminance) out.add_depth_luminance(l);
+    if (task.burst) {
+        v1::BurstPass *b = out.mutable_burst();
+        b->set_pass(task.burst->pass);
+        b->set_block(task.burst->block);
+        b->set_mean_luminance(task.burst->meanLuminance);
+        b->set_interleave(task.burst->plan.interleave);
+        b->set_blocks(task.burst->plan.blocks);
+        b->set_chains_per_pixel(task.burst->plan.chainsPerPixel);
+    }
     return out;
 }
 
@@ -102,7 +113,30 @@ ChainTask fromProto(const v1::ChainTask &task) {
     });
     out.mutations = task.mutations();
     out.depthLuminance = finiteValues(task.depth_luminance(), "chain task");
+    if (task.has_burst()) {
+        const v1::BurstPass &b = task.burst();
+        if (!std::isfinite(b.mean_luminance()) || b.mean_luminance() < 0)
+            throw FarmError("chain task: the burst pass's mean luminance is negative or not finite");
+        if (b.interleave() < 1 || b.blocks() < 1 || b.block() >= b.blocks() || !std::isfinite(b.chains_per_pixel()) ||
+            !(b.chains_per_pixel() > 0))
+            throw FarmError("chain task: the burst pass's plan is malformed");
+        BurstPlan plan;
+        plan.interleave = b.interleave();
+        plan.blocks = b.blocks();
+        plan.chainsPerPixel = b.chains_per_pixel();
+        out.burst = BurstPass{b.pass(), b.block(), b.mean_luminance(), plan};
+    }
     return out;
+}
+
+void toProto(const SeedingTask &task, v1::SeedingTask &out) {
+    out.set_first_pixel(task.firstPixel);
+    out.set_pixel_count(task.pixelCount);
+    out.set_pilot_samples(task.pilotSamples);
+}
+
+SeedingTask fromProto(const v1::SeedingTask &task) {
+    return {task.first_pixel(), task.pixel_count(), task.pilot_samples()};
 }
 
 std::string encodeSeedingResult(const SeedingResult &result) {
@@ -140,12 +174,16 @@ SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, co
     return out;
 }
 
-v1::ChainOutput toProto(const ChainImage &chains) { return chainOutput(chains); }
+v1::ChainOutput toProto(const ChainImage &chains) {
+    v1::ChainOutput out = chainOutput(chains);
+    out.set_tasks(chains.tasks);
+    return out;
+}
 
 std::string encodeChainResult(const ChainResult &result) { return chainOutput(result).SerializeAsString(); }
 
 ChainResult decodeChainResult(std::string_view payload, ImageBlock film) {
-    ChainResult out{std::move(film), 0, {}, {}, 0, 0};
+    ChainResult out{std::move(film), 0, 0, {}, {}, 0, 0};
     readChainOutput(parse<v1::ChainOutput>(payload, "chain result"), out);
     return out;
 }
@@ -153,6 +191,7 @@ ChainResult decodeChainResult(std::string_view payload, ImageBlock film) {
 ChainImage fromProto(const v1::ChainOutput &chains, ImageBlock film) {
     ChainImage out(std::move(film));
     readChainOutput(chains, out);
+    out.tasks = chains.tasks();
     return out;
 }
 

@@ -17,6 +17,10 @@ pathfarm::v1::ChainTask toProto(const ChainTask &task);
 // Throws FarmError when the task is malformed (columns of unequal length, weights not finite).
 ChainTask fromProto(const pathfarm::v1::ChainTask &task);
 
+// Seeding tasks (the pilot of a burst job included).
+void toProto(const SeedingTask &task, pathfarm::v1::SeedingTask &out);
+SeedingTask fromProto(const pathfarm::v1::SeedingTask &task);
+
 std::string encodeSeedingResult(const SeedingResult &result);
 // Throws FarmError naming the problem when the payload is corrupt, or when a candidate lies outside
 // `task`'s pixels of `film` or has a weight that is negative or not finite.

@@ -12,7 +12,7 @@ namespace pf::test {
 
 Normalizer seedChains(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed) {
     std::vector<SeedingResult> seeds;
-    for (const SeedingTask &t : seedingTasks(scene))
+    for (const SeedingTask &t : integrator.seedingTasks(scene))
         seeds.push_back(runSeedingTask(scene, integrator.seeding(scene), seed, t));
     return Normalizer(std::move(seeds));
 }

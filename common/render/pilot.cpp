@@ -1,0 +1,50 @@
+#include "render/pilot.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "scene/scene.h"
+
+namespace pf {
+
+namespace {
+
+constexpr uint64_t kPilotSeedTag = 0x9170bULL;
+
+}  // namespace
+
+uint64_t pilotSeed(uint64_t jobSeed) { return hashCombine(jobSeed, kPilotSeedTag); }
+
+SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples) {
+    const auto start = std::chrono::steady_clock::now();
+    const uint64_t rays0 = Scene::threadRayCount();
+    const Film &film = scene.sensor().film();
+    const uint64_t pixels = static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
+    const double perSample = static_cast<double>(pixels) / static_cast<double>(samples);
+    const uint64_t seed = pilotSeed(jobSeed);
+    SeedingResult result;
+    IndependentSampler sampler;
+    for (uint64_t j = 0; j < samples; ++j) {
+        sampler.start(seed, j, 0);
+        // Stratum j of the pixels, [j, j + 1) * pixels / samples, a uniform position in it.
+        const double u = (static_cast<double>(j) + sampler.next1D()) * perSample;
+        const uint64_t crop = std::min(pixels - 1, static_cast<uint64_t>(u));
+        const uint64_t pixel = filmPixel(film, crop);
+        const Vec2 raster = samplePixel(film, pixel, sampler);
+        config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
+            const int depth = x.s + x.t - 1;
+            const double weight = x.value.luminance() * perSample;
+            if (depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
+            if (result.depthLuminance.size() <= static_cast<size_t>(depth))
+                result.depthLuminance.resize(static_cast<size_t>(depth) + 1, 0.0);
+            result.depthLuminance[static_cast<size_t>(depth)] += weight;
+        });
+    }
+    result.samples = samples;
+    result.rays = Scene::threadRayCount() - rays0;
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+}  // namespace pf
