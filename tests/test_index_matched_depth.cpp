@@ -84,9 +84,12 @@ struct Estimate {
 
 Estimate render(const std::string &integrator, int maxDepth, int64_t spp, int seeds) {
     std::string xml = slabScene(maxDepth);
-    // The chain integrator's image mean is its seeding estimate: Mitsuba's default of 100000 samples.
+    // The chain integrator renders depths 1 and 2 as its direct component (directSamples BDPT samples per
+    // pixel) and the rest with chains, whose image mean is the seeding estimate (luminanceSamples, Mitsuba's
+    // default of 100000).
     if (integrator == "pssmlt")
-        xml.insert(xml.find("</integrator>"), R"(<integer name="luminanceSamples" value="100000"/>)");
+        xml.insert(xml.find("</integrator>"), R"(<integer name="luminanceSamples" value="100000"/>
+            <integer name="directSamples" value="128"/>)");
     double sum = 0, sum2 = 0;
     for (int s = 0; s < seeds; ++s) {
         const RenderOutput out = renderXml(xml, integrator, spp, 100 + static_cast<uint64_t>(s), 2);
