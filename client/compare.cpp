@@ -31,6 +31,7 @@ struct CompareCommand::Args {
     int repeat = 1, snapshots = 8, threads = 0;
     int64_t referenceSpp = 1024;
     uint64_t seed = 0;
+    bool strict = false;
     MetricOptions metrics;
     FarmConnection farm;
     CLI::App *cmd = nullptr;
@@ -63,6 +64,7 @@ CompareCommand::CompareCommand(CLI::App &app) : a_(std::make_unique<Args>()) {
     c.add_option("--seed", a.seed, "Seed of the first repetition");
     c.add_option("-D", a.defines, "Scene parameter: -D name=value sets $name");
     c.add_option("-P,--param", a.params, "Integrator parameter of every run: -P name=value");
+    c.add_flag("--strict", a.strict, "A parameter that its plugin does not use refuses the runs (else a warning)");
     c.add_option("--trim", a.metrics.trimFraction, "Discard this fraction of the highest per-pixel errors (e.g. 0.001)")
         ->check(CLI::Range(0.0, 0.5));
     c.add_option("--epsilon", a.metrics.epsilon, "Epsilon in the denominators of relMSE, MAPE, SMAPE")
@@ -120,9 +122,9 @@ Bitmap decode(const FetchedImage &image, const fs::path &scratch) {
 // The comparison itself, on a connected farm.
 class Comparison {
 public:
-    Comparison(const NameValues &defines, const NameValues &params, const FarmConnection &farm,
+    Comparison(const NameValues &defines, const NameValues &params, bool strict, const FarmConnection &farm,
                v1::ClientService::Stub &stub, const fs::path &dir, CompareReport &report)
-        : defines_(defines), params_(params), farm_(farm), stub_(stub), dir_(dir), r_(report) {}
+        : defines_(defines), params_(params), strict_(strict), farm_(farm), stub_(stub), dir_(dir), r_(report) {}
 
     void run(const std::string &referenceFile, const Bitmap &reference) {
         referenceFile_ = referenceFile;
@@ -156,9 +158,13 @@ private:
         spec.mutable_budget()->set_time_seconds(r_.timeBudget);
         spec.set_seed(run.seed);
         spec.set_label("compare " + integrator + " #" + std::to_string(rep));
+        spec.set_strict(strict_);
         JobObserver observer;
         observer.snapshotTimes = r_.snapshotTimes;
         observer.submitted = [&](const v1::Job &job) {
+            // Every run loads the same scene, so its warnings are shown once.
+            if (!warned_) printWarnings(job);
+            warned_ = true;
             if (job.width() != r_.width || job.height() != r_.height)
                 throw SceneError(referenceFile_ + ": the reference is " + std::to_string(r_.width) + "x" +
                                  std::to_string(r_.height) + " but the scene renders " + std::to_string(job.width()) +
@@ -230,6 +236,7 @@ private:
     }
 
     const NameValues &defines_, &params_;
+    bool strict_, warned_ = false;
     const FarmConnection &farm_;
     v1::ClientService::Stub &stub_;
     fs::path dir_;
@@ -292,7 +299,7 @@ int CompareCommand::run() {
         std::string referenceFile = a.reference;
         if (a.reference.empty()) {
             // Its own seed stream, far from the runs' seeds, so no run shares random numbers with it.
-            const ReferenceRequest req{a.cacheDir, a.referenceSpp, a.seed + 0x5eed0000u, defines, params};
+            const ReferenceRequest req{a.cacheDir, a.referenceSpp, a.seed + 0x5eed0000u, defines, params, a.strict};
             reference = obtainReference(*stub, farm, bundle, req, r.reference);
             referenceFile = r.reference.cacheFile;
         } else {
@@ -300,7 +307,7 @@ int CompareCommand::run() {
         }
         r.reference.exr = "reference.exr";
         writeEXR((dir / r.reference.exr).string(), reference);
-        Comparison(defines, params, farm, *stub, dir, r).run(referenceFile, reference);
+        Comparison(defines, params, a.strict, farm, *stub, dir, r).run(referenceFile, reference);
     } catch (const CallError &e) {
         if (e.code == grpc::StatusCode::INVALID_ARGUMENT) throw SceneError(e.what());
         throw;

@@ -126,6 +126,10 @@ void uploadBundle(v1::ClientService::Stub &stub, const FarmConnection &farm, con
                  reply.bytes(), bundle.hash.c_str());
 }
 
+void printWarnings(const v1::Job &job) {
+    for (const std::string &w : job.warnings()) std::fprintf(stderr, "warning: %s\n", w.c_str());
+}
+
 void setParams(google::protobuf::RepeatedPtrField<v1::Param> &out, const NameValues &values) {
     for (const auto &[n, v] : values) {
         v1::Param *p = out.Add();

@@ -83,6 +83,10 @@ SceneBundle makeSceneBundle(const std::string &scenePath, const NameValues &defi
 // Uploads the bundle unless the master stores it already (bundles are content-addressed).
 void uploadBundle(pathfarm::v1::ClientService::Stub &stub, const FarmConnection &farm, const SceneBundle &bundle);
 
+// The master's warnings about a submitted job's scene (unused parameters), on stderr as `pathfarm render`
+// prints its own: "warning: scene.xml:17: perspective: unused parameter 'focusDistance'".
+void printWarnings(const pathfarm::v1::Job &job);
+
 // The parameters or definitions of a job spec.
 void setParams(google::protobuf::RepeatedPtrField<pathfarm::v1::Param> &out, const NameValues &values);
 

@@ -46,7 +46,7 @@ struct FarmCommands::Args : FarmConnection {
     uint64_t seed = 0;
     int priority = 0;
     std::vector<std::string> params, defines;
-    bool wait = false;
+    bool wait = false, strict = false;
     // the other commands
     int64_t job = 0;
     bool all = false;
@@ -78,6 +78,8 @@ FarmCommands::FarmCommands(CLI::App &app) : a_(std::make_unique<Args>()) {
     a.submit->add_option("-P,--param", a.params, "Integrator parameter: -P name=value");
     a.submit->add_option("--priority", a.priority, "Higher runs first (default 0)");
     a.submit->add_option("--label", a.label, "Text shown in listings");
+    a.submit->add_flag("--strict", a.strict,
+                       "A parameter that its plugin does not use refuses the job (else a warning)");
     a.submit->add_flag("--wait", a.wait, "Wait for the job, printing progress, then fetch its image");
     a.submit->add_option("-o,--output", a.output, "With --wait: output EXR (default: named after the scene)");
     addReconnectOption(*a.submit, a.reconnectSeconds);
@@ -184,8 +186,10 @@ int FarmCommands::run() {
             spec.set_seed(a.seed);
             spec.set_priority(a.priority);
             spec.set_label(a.label.empty() ? bundle.sceneFile : a.label);
+            spec.set_strict(a.strict);
             v1::Job job;
             check(stub->SubmitJob(ctx().get(), req, &job), "submitting " + a.scene);
+            printWarnings(job);
             std::printf("job %" PRId64 " submitted: %s, %dx%d, %s\n", job.id(), job.scene_file().c_str(), job.width(),
                         job.height(), job.integrator().c_str());
             std::fflush(stdout);

@@ -29,15 +29,19 @@ struct RenderArgs {
     uint64_t seed = 0;
     int threads = 0;
     std::vector<std::string> defines, params;
-    bool quiet = false;
+    bool quiet = false, strict = false;
 };
 
 int runRender(const RenderArgs &a) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
-    auto scene = pf::loadScene(a.scene, pf::parseNameValues(a.defines, "-D"));
+    auto scene = pf::loadScene(a.scene, pf::parseNameValues(a.defines, "-D"), a.strict);
     const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    auto integrator = pf::makeIntegrator(*scene, a.integrator, pf::parseNameValues(a.params, "-P"));
+    std::vector<pf::SceneWarning> warnings = scene->warnings();
+    auto integrator =
+        pf::makeIntegrator(*scene, a.integrator, pf::parseNameValues(a.params, "-P"), a.strict, &warnings);
+    // Mitsuba 0.6 logs unused parameters and renders on; so does pathfarm unless --strict made them errors.
+    for (const pf::SceneWarning &w : warnings) std::fprintf(stderr, "warning: %s\n", w.str().c_str());
 
     pf::RenderOptions opt;
     opt.spp = a.spp;
@@ -98,6 +102,8 @@ int main(int argc, char **argv) {
     render->add_option("-D", r.defines, "Scene parameter: -D name=value sets $name");
     render->add_option("-P,--param", r.params, "Integrator parameter: -P name=value (e.g. -P maxDepth=8)");
     render->add_flag("-q,--quiet", r.quiet, "No progress bar");
+    render->add_flag("--strict", r.strict,
+                     "A parameter that its plugin does not use is an error (exit 2) instead of a warning");
     pf::client::FarmCommands farm(app);
     pf::client::DiffCommand diff(app);
     pf::client::CompareCommand compare(app);

@@ -54,6 +54,7 @@ Bitmap obtainReference(v1::ClientService::Stub &stub, const FarmConnection &farm
     spec.mutable_budget()->set_spp(request.spp);
     spec.set_seed(request.seed);
     spec.set_label("reference of " + scene.sceneFile);
+    spec.set_strict(request.strict);
     std::fprintf(stderr, "compare: rendering the reference (%s, %lld spp) on the farm\n", kReferenceIntegrator,
                  static_cast<long long>(request.spp));
     const FinishedJob done = runJob(stub, farm, spec);

@@ -15,7 +15,8 @@ struct ReferenceRequest {
     int64_t spp = 0;
     uint64_t seed = 0;
     NameValues defines;
-    NameValues params;  // of the compared runs; only maxDepth (which changes the integral) is passed on
+    NameValues params;    // of the compared runs; only maxDepth (which changes the integral) is passed on
+    bool strict = false;  // compare --strict (does not change the image, so not part of the cache key)
 };
 
 // $XDG_CACHE_HOME/pathfarm/references, else $HOME/.cache/pathfarm/references.

@@ -22,6 +22,12 @@ namespace v1 = pathfarm::v1;
 
 namespace {
 
+// Messages name files as the submitter knows them, relative to the scene's directory.
+std::string relativeTo(const std::string &root, std::string msg) {
+    for (size_t at; (at = msg.find(root)) != std::string::npos;) msg.erase(at, root.size());
+    return msg;
+}
+
 // Rejects what no scene or integrator could make sense of, before anything is loaded.
 void checkSpec(const JobSpec &spec, const MasterConfig &cfg) {
     constexpr int kMaxParams = 256;
@@ -57,16 +63,19 @@ Master::Loaded Master::load(const JobSpec &spec, v1::Job &record) const {
     const std::string root = fs::absolute(bundles_.dir(spec.bundle_hash())).string() + "/";
     std::unique_ptr<Scene> scene;
     std::unique_ptr<Integrator> integrator;
+    std::vector<SceneWarning> warnings;
     try {
         const std::lock_guard<std::mutex> lock(sceneLoadMu_);
-        scene = loadScene(root + manifest.scene_file(), farm::toNameValues(spec.defines()));
-        integrator = makeIntegrator(*scene, spec.integrator(), farm::toNameValues(spec.params()));
+        scene = loadScene(root + manifest.scene_file(), farm::toNameValues(spec.defines()), spec.strict());
+        warnings = scene->warnings();
+        integrator =
+            makeIntegrator(*scene, spec.integrator(), farm::toNameValues(spec.params()), spec.strict(), &warnings);
     } catch (const SceneError &e) {
-        // Errors name files as the submitter knows them, relative to the scene's directory.
-        std::string msg = e.what();
-        for (size_t at; (at = msg.find(root)) != std::string::npos;) msg.erase(at, root.size());
-        throw SceneError(msg);
+        throw SceneError(relativeTo(root, e.what()));
     }
+    // Recovery loads a job again: its warnings are replaced, not repeated.
+    record.clear_warnings();
+    for (const SceneWarning &w : warnings) record.add_warnings(relativeTo(root, w.str()));
     const Film &film = scene->sensor().film();
     if (static_cast<int64_t>(film.cropWidth()) * film.cropHeight() > cfg_.maxPixels)
         throw farm::FarmError("job spec: " + std::to_string(film.cropWidth()) + "x" +

@@ -178,6 +178,7 @@ TEST_F(Compare, MasterModeRunsOnTheGivenFarm) {
 TEST_F(Compare, BadOptionsAreClearErrorsWithExitTwo) {
     writeFile(dir, "text.exr", "not an image\n");
     ASSERT_EQ(runCommand(cli + " render " + scene + " -q --spp 2 -D res=16 -o " + dir + "/small.exr").exitCode, 0);
+    ASSERT_EQ(runCommand(cli + " render " + scene + " -q --spp 2 -o " + dir + "/full.exr").exitCode, 0);
     struct Case {
         std::string args, expected;
     };
@@ -190,6 +191,9 @@ TEST_F(Compare, BadOptionsAreClearErrorsWithExitTwo) {
         {"--integrators path --time 1 --reference " + dir + "/text.exr" + o, dir + "/text.exr"},
         {"--integrators path --time 1 --reference " + dir + "/small.exr --reference-spp 4" + o, "--reference"},
         {"--integrators path --time 1 -P maxDepth" + o, "-P"},
+        // An unused parameter is a warning, unless --strict makes the farm refuse the runs.
+        {"--integrators path --time 1 --strict -P noSuchParameter=1 --reference " + dir + "/full.exr" + o,
+         "unknown parameter 'noSuchParameter'"},
         // Found once the farm has accepted the job and reported its size.
         {"--integrators path --time 1 --reference " + dir + "/small.exr" + o,
          dir + "/small.exr: the reference is 16x16 but the scene renders 32x32"},

@@ -174,11 +174,13 @@ TEST_F(FarmSecurity, MalformedJobSpecsGetClearErrors) {
          },
          "maxDepth"},
         {[](v1::JobSpec &s) {
+             // Only a strict job refuses an unused parameter; see UnusedParametersAreWarningsUnlessStrict.
+             s.set_strict(true);
              auto *p = s.add_params();
              p->set_name("noSuchParameter");
              p->set_value("1");
          },
-         "noSuchParameter"},
+         "unknown parameter 'noSuchParameter'"},
         {[](v1::JobSpec &s) {
              auto *d = s.add_defines();
              d->set_name("res");
@@ -206,6 +208,33 @@ TEST_F(FarmSecurity, MalformedJobSpecsGetClearErrors) {
     const auto [code, output] = farm_->cli("submit " + bad + " --spp 1");
     EXPECT_EQ(code, 2) << output;
     EXPECT_NE(output.find("scene.xml"), std::string::npos) << output;
+}
+
+// The master loads a job as `pathfarm render` does: a parameter that no plugin uses is a warning in the
+// job record unless the spec is strict (pathfarm submit --strict), when the job is refused.
+TEST_F(FarmSecurity, UnusedParametersAreWarningsUnlessStrict) {
+    v1::SubmitJobRequest req;
+    v1::JobSpec &spec = *req.mutable_spec();
+    spec.set_bundle_hash(uploadScene());
+    spec.mutable_budget()->set_spp(1);
+    auto *p = spec.add_params();
+    p->set_name("noSuchParameter");
+    p->set_value("1");
+    v1::Job job;
+    ASSERT_TRUE(farm_->clientStub()->SubmitJob(farm_->context(farm_->clientToken()).get(), req, &job).ok());
+    ASSERT_EQ(job.warnings_size(), 1);
+    EXPECT_NE(job.warnings(0).find("unused parameter 'noSuchParameter'"), std::string::npos) << job.warnings(0);
+    spec.set_strict(true);
+    EXPECT_EQ(submit(spec).error_code(), StatusCode::INVALID_ARGUMENT);
+    // Through the CLI, as a user sees it: a warning on stderr, or exit 2 with --strict.
+    const auto [code, output] = farm_->cli("submit " + scene_ + " --spp 1 -P noSuchParameter=1");
+    EXPECT_EQ(code, 0) << output;
+    EXPECT_NE(output.find("warning: command line (-P noSuchParameter=1): path: unused parameter 'noSuchParameter'"),
+              std::string::npos)
+        << output;
+    const auto [strictCode, strictOutput] = farm_->cli("submit " + scene_ + " --spp 1 --strict -P noSuchParameter=1");
+    EXPECT_EQ(strictCode, 2) << strictOutput;
+    EXPECT_NE(strictOutput.find("unknown parameter 'noSuchParameter'"), std::string::npos) << strictOutput;
 }
 
 TEST_F(FarmSecurity, GarbageFromWorkersIsRefused) {

@@ -8,6 +8,11 @@
 // The shell scenes put the camera at the centre of two concentric index-matched spheres of radii R1 < R2
 // with the medium between them, inside a black sphere of radius 10 that emits Le inwards. Every camera
 // ray is radial, so every pixel has the same expected value.
+//
+// Depths count the index-matched crossings as Mitsuba 0.6 does (README "Path depth"): a camera ray
+// crosses R1 (depth 1) and R2 (2) before it reaches the emitter (3), so unscattered light needs maxDepth
+// 3; light scattered once in the shell towards the emitter without meeting the inner ball needs 4, and
+// once towards the inner ball, which it crosses twice, 6.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -101,10 +106,15 @@ TEST(VolPath, CameraInsideAMedium) {
     }
 }
 
-TEST(VolPath, MaxDepthOneSeesOnlyUnscatteredLight) {
+TEST(VolPath, MaxDepthThreeSeesOnlyUnscatteredLight) {
     const MediumSpec m{Spectrum(0.5, 0.2, 1.5), Spectrum(0.1, 0.4, 0.2)};
-    const RenderOutput out = renderXml(shellScene(m, 1), "volpath", 32, 2, 2);
-    expectChannelMeans(out.image, kLe * exp((m.sigmaS + m.sigmaA) * -(kR2 - kR1)), 0.01, "maxDepth 1");
+    const RenderOutput out = renderXml(shellScene(m, 3), "volpath", 32, 2, 2);
+    expectChannelMeans(out.image, kLe * exp((m.sigmaS + m.sigmaA) * -(kR2 - kR1)), 0.01, "maxDepth 3");
+    // With fewer, the emitter lies beyond the two crossings.
+    for (int depth : {1, 2}) {
+        const RenderOutput none = renderXml(shellScene(m, depth), "volpath", 4, 2, 2);
+        EXPECT_EQ(regionMean(none.image, 0, 0, none.image.width, none.image.height).mean, 0.0) << "maxDepth " << depth;
+    }
 }
 
 // Path length inside the shell from radius r in a direction whose cosine with the outward radial
@@ -127,7 +137,9 @@ double simpson(const std::function<double(double)> &f, double a, double b, int n
 //   Le [ exp(-st (R2-R1)) + ss Int_{R1}^{R2} exp(-st (r-R1)) Int_{-1}^{1} 2 pi p(mu) exp(-st chord(r,mu)) dmu dr ],
 // p the HG density of the angle between the camera ray (outwards) and the direction towards the light.
 // The mu integrand has a kink where the direction grazes the inner ball; the quadrature splits there.
-Spectrum singleScatteringReference(const MediumSpec &m) {
+// The directions below the kink cross the inner ball (two crossings more): at maxDepth 4 only the
+// directions above it count (`missInnerBall`).
+Spectrum singleScatteringReference(const MediumSpec &m, bool missInnerBall = true) {
     Spectrum result;
     for (int c = 0; c < 3; ++c) {
         const double st = m.sigmaS[c] + m.sigmaA[c], ss = m.sigmaS[c], g = m.g;
@@ -138,7 +150,7 @@ Spectrum singleScatteringReference(const MediumSpec &m) {
         auto inner = [&](double r) {
             auto f = [&](double mu) { return 2 * kPi * phase(mu) * std::exp(-st * shellChord(r, mu)); };
             const double kink = -std::sqrt(std::max(0.0, 1 - kR1 * kR1 / (r * r)));
-            return simpson(f, -1, kink, 2000) + simpson(f, kink, 1, 2000);
+            return (missInnerBall ? 0.0 : simpson(f, -1, kink, 2000)) + simpson(f, kink, 1, 2000);
         };
         const double scattered = simpson([&](double r) { return std::exp(-st * (r - kR1)) * inner(r); }, kR1, kR2, 400);
         result[c] = kLe * (std::exp(-st * (kR2 - kR1)) + ss * scattered);
@@ -146,23 +158,24 @@ Spectrum singleScatteringReference(const MediumSpec &m) {
     return result;
 }
 
-// Single scattering (maxDepth = 2) exercises next-event estimation from medium vertices, phase sampling
-// with the MIS walk through index-matched boundaries, and medium tracking across them.
+// Single scattering (maxDepth = 4: two crossings, the scattering event, the crossing out of the shell)
+// exercises next-event estimation from medium vertices, phase sampling with the MIS walk through
+// index-matched boundaries within the remaining depth, and medium tracking across them.
 TEST(VolPath, SingleScatteringMatchesQuadrature) {
     const MediumSpec iso{Spectrum(0.4, 0.8, 1.2), Spectrum(0.1, 0.1, 0.3)};
-    expectChannelMeans(renderXml(shellScene(iso, 2), "volpath", 32, 3, 2).image, singleScatteringReference(iso), 0.01,
+    expectChannelMeans(renderXml(shellScene(iso, 4), "volpath", 32, 3, 2).image, singleScatteringReference(iso), 0.01,
                        "isotropic");
     const MediumSpec forward{Spectrum(0.9, 0.5, 1.4), Spectrum(0.2, 0.3, 0.1), 0.6};
-    expectChannelMeans(renderXml(shellScene(forward, 2), "volpath", 32, 4, 2).image, singleScatteringReference(forward),
+    expectChannelMeans(renderXml(shellScene(forward, 4), "volpath", 32, 4, 2).image, singleScatteringReference(forward),
                        0.01, "hg g = 0.6");
 }
 
 // hideEmitters (Mitsuba): an emitter seen directly, here through the medium, disappears, but the light
-// it casts does not. With maxDepth = 2 exactly the single-scattered part of the reference remains.
+// it casts does not. With maxDepth = 4 exactly the single-scattered part of the reference remains.
 TEST(VolPath, HideEmittersKeepsScatteredLight) {
     const MediumSpec m{Spectrum(0.4, 0.8, 1.2), Spectrum(0.1, 0.1, 0.3)};
     const Spectrum direct = kLe * exp((m.sigmaS + m.sigmaA) * -(kR2 - kR1));
-    expectChannelMeans(renderXml(shellScene(m, 2, 0, true), "volpath", 32, 6, 2).image,
+    expectChannelMeans(renderXml(shellScene(m, 4, 0, true), "volpath", 32, 6, 2).image,
                        singleScatteringReference(m) - direct, 0.015, "hideEmitters");
 }
 

@@ -52,10 +52,16 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
         return (!only || *only == Strategy(s, t)) && (maxDepth_ < 0 || s + t - 1 <= maxDepth_) &&
                (mis_.lightImage || t >= 2);
     };
+    // s + t - 1 <= maxDepth above prunes strategies early; the index-matched surfaces that the path's
+    // edges cross count too (Mitsuba's bdpt_proc.cpp lets a connection bridge only maxDepth - s - t + 1
+    // of them), which only the built path knows. All strategies of a path share its depth, so the MIS
+    // weights need no change.
     const auto report = [&](int s, int t) {
+        const int depth = pathDepth(path);
+        if (maxDepth_ >= 0 && depth > maxDepth_) return;
         path.densities(scene, pFwd, pRev);
         const double weight = misWeight(scene, path, s, pFwd, pRev, mis_);
-        visit({s, t, path.raster(), weight, path.contribution() * weight, &path});
+        visit({s, t, depth, path.raster(), weight, path.contribution() * weight, &path});
     };
     for (int t = 1; t <= camera.size(); ++t)
         for (int s = 0; s <= light.size(); ++s) {

@@ -1,5 +1,5 @@
 // Bidirectional path tracing (`bdpt`) on the path-space layer ([TH A4]; ALGORITHMS.md §0, §1.4; Veach
-// 1997 ch. 10). Parameters as in Mitsuba 0.6: maxDepth (edges, as in the path tracer; -1 = unbounded),
+// 1997 ch. 10). Parameters as in Mitsuba 0.6: maxDepth (edges plus index-matched crossings, path.h; -1 = unbounded),
 // rrDepth, lightImage (evaluate the strategies that land on other pixels: t = 1 light tracing and t = 0
 // lens hits), sampleDirect (the s = 1 and t = 1 strategies sample their endpoint from the other vertex).
 // pathfarm adds `heuristic` ("power", the default, or "balance") and `strategyImages` (a directory that
@@ -19,6 +19,7 @@ namespace pf {
 // One strategy's share of a pixel sample.
 struct StrategySample {
     int s = 0, t = 0;
+    int depth = 0;                     // Mitsuba's depth of the path: s + t - 1 plus its crossings (path.h)
     Vec2 raster;                       // where it lands on the film
     double weight = 0;                 // its MIS weight
     Spectrum value;                    // weight * f / p

@@ -21,20 +21,20 @@ class Scene;
 // The budget vocabulary shared by every integrator (issue 5 extends its meaning to chains):
 // spp = samples per pixel; timeLimit > 0 = wall-clock budget spent in whole passes.
 struct RenderOptions {
-    int64_t spp = 0;          // 0 = the scene's sampleCount
-    double timeLimit = 0;     // seconds; > 0 overrides spp
+    int64_t spp = 0;       // 0 = the scene's sampleCount
+    double timeLimit = 0;  // seconds; > 0 overrides spp
     uint64_t seed = 0;
-    int threads = 0;          // 0 = all cores
-    bool progress = false;    // draw a progress bar on stderr
+    int threads = 0;        // 0 = all cores
+    bool progress = false;  // draw a progress bar on stderr
     // Called after every pass with the pass count and the image so far (live preview, checkpoints).
     std::function<void(int64_t samplesPerPixel, const Bitmap &image)> onPass;
 };
 
 struct RenderStats {
-    double seconds = 0;        // wall time of rendering (scene loading excluded)
+    double seconds = 0;  // wall time of rendering (scene loading excluded)
     int64_t samplesPerPixel = 0;
-    uint64_t samples = 0;      // camera samples (pixel samples) taken
-    uint64_t rays = 0;         // intersect + occluded queries
+    uint64_t samples = 0;  // camera samples (pixel samples) taken
+    uint64_t rays = 0;     // intersect + occluded queries
     // Markov-chain renders: transitions per mutation type and the chains' further statistics.
     MutationCounts counts;
     ChainCounters counters;
@@ -66,9 +66,9 @@ public:
     Bitmap render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const override;
 };
 
-// Creates the integrator `type` ("path", ...). `props` are the scene file's <integrator> parameters when
-// the file names the same type (then every parameter must be understood), or the CLI's parameters
-// otherwise. Throws SceneError for unknown types or bad parameters.
+// Creates the integrator `type` ("path", ...) from `props`. With `strict` a parameter it does not use is
+// an error; without, unused parameters are left for the caller to check (makeIntegrator warns about
+// them). Throws SceneError for unknown types or bad parameters.
 std::unique_ptr<Integrator> createIntegrator(const std::string &type, const Properties &props, bool strict);
 // Names accepted by createIntegrator.
 std::string integratorNames();

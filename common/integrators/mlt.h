@@ -6,7 +6,7 @@
 // lens, caustic and multi-chain perturbations explore the neighbourhood of a path. Mitsuba 0.6 parameter
 // names and defaults:
 //
-//   maxDepth (-1)                  longest path in edges (-1: unbounded)
+//   maxDepth (-1)                  longest path in edges plus index-matched crossings (path.h; -1: unbounded)
 //   rrDepth (10)                   Russian roulette of the seeding BDPT (Mitsuba's MLT hard-codes 10)
 //   directSamples (16)             samples per pixel of the direct component (paths of at most two edges),
 //                                  rendered by BDPT without chains; 0 hides it, -1 leaves it to the chains

@@ -30,7 +30,9 @@ PrimarySampleIntegrator::ChainSetup MMLT::setup(const Scene &scene, const ChainT
         bdpt().evaluate(
             scene, u, position,
             [&](const StrategySample &x) {
-                out.push_back({x.raster, x.value * strategies});
+                // A chain of s + t = depth + 1 still leaves the paths whose crossings keep them within
+                // the direct component's depth to that component.
+                if (x.depth >= minDepth()) out.push_back({x.raster, x.value * strategies});
             },
             Strategy(lightVertices, depth + 1 - lightVertices));
     };

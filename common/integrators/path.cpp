@@ -11,11 +11,15 @@
 //   estimation's shadow rays do, so the two strategies estimate the same paths and the MIS weights are
 //   those of the direction densities. The path itself then continues with free-flight sampling, and
 //   emission it meets later is not counted again.
-// * Depth counts scattering events, surface or medium, as Mitsuba's maxDepth does (1 = directly visible
-//   emitters, 2 = single scattering, -1 = unbounded). Passing through a Null lobe (an index-matched
-//   boundary, the transparent part of a mask or thin dielectric) is not a scattering event; unlike
-//   Mitsuba's volpath, which counts those crossings, this keeps volpath identical to `path` on scenes
-//   without media.
+// * Depth counts path segments as Mitsuba 0.6 does (1 = directly visible emitters, 2 = single
+//   scattering, -1 = unbounded), and a pass through a Null lobe (an index-matched boundary, the
+//   transparent part of a mask or thin dielectric) counts as one, like a scattering event: Mitsuba's
+//   path, volpath and volpath_simple all advance their depth at such a crossing (volpath: "rRec.depth++"
+//   in its ENull branch), and their shadow rays and emitter searches from a vertex at depth d cross at
+//   most maxDepth - d - 1 of them (the `interactions` of sampleAttenuatedEmitterDirect and
+//   rayIntersectAndLookForEmitter). So a path contributes iff its segments plus its crossings are at
+//   most maxDepth, the rule README.md states for every integrator. Russian roulette uses the same depth
+//   (volpath: "rRec.depth++ >= m_rrDepth" after each scattering event, the crossings counted).
 // * `path` is this estimator with media ignored (Mitsuba's path tracer does not render media): every
 //   segment is vacuum and index-matched boundaries are plain pass-through.
 #include "integrators/path.h"
@@ -32,27 +36,48 @@ namespace {
 // Bound on consecutive pass-through crossings between two scattering events (coincident null surfaces).
 constexpr int kMaxCrossings = 256;
 
+// How many index-matched surfaces a shadow ray or emitter search from a vertex at `depth` may cross
+// (Mitsuba's `interactions = maxDepth - depth - 1`): each crossing is one more segment of the path.
+// Negative: any number (maxDepth = -1).
+int crossingBudget(int maxDepth, int depth) { return maxDepth < 0 ? -1 : maxDepth - depth - 1; }
+
+bool withinBudget(int crossings, int budget) { return budget < 0 || crossings <= budget; }
+
 // Radiance arriving at `ref` along the sampled direction ray.d (ray leaves ref in `medium`): each
-// emitter the direction reaches through index-matched surfaces contributes its radiance times the
-// transmittance up to it, and the environment contributes if the direction leaves the scene.
+// emitter the direction reaches through at most `budget` index-matched surfaces contributes its
+// radiance times the transmittance up to it, and the environment contributes if the direction leaves
+// the scene within the budget.
 Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, const Medium *medium, bool trackMedia,
-                       double dirPdf, bool delta, Intersection &next) {
+                       double dirPdf, bool delta, Intersection &next, int budget) {
     Spectrum L;
+    int crossed = 0;  // surfaces passed before the one visited (every visited surface but a blocker is passed)
     const auto visit = [&](const Intersection &its, const Spectrum &T) {
-        if (its.isEmitter()) L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
+        if (its.isEmitter() && withinBudget(crossed, budget))
+            L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
+        ++crossed;
     };
     const Spectrum escaped = walkTransmittance(scene, ray, medium, visit, trackMedia, &next);
-    if (!escaped.isBlack()) L += escaped * misWeightedEmission(scene, ray, Intersection(), ref, dirPdf, delta);
+    if (!escaped.isBlack() && withinBudget(crossed, budget))
+        L += escaped * misWeightedEmission(scene, ray, Intersection(), ref, dirPdf, delta);
     return L;
 }
 
 // Next-event estimation's contribution for an emitter sample ds with weight `value` (radiance / pdf):
-// the scattering value f towards ds.d, attenuated along `shadow` (which starts in `medium`), weighted
-// against the scattering density scatterPdf of the same direction.
+// the scattering value f towards ds.d, attenuated along `shadow` (which starts in `medium` and may cross
+// at most `budget` index-matched surfaces), weighted against the scattering density scatterPdf of the
+// same direction.
 Spectrum directLight(const Scene &scene, const DirectSample &ds, const Spectrum &value, const Spectrum &f,
-                     double scatterPdf, const Ray &shadow, const Medium *medium, bool trackMedia) {
+                     double scatterPdf, const Ray &shadow, const Medium *medium, bool trackMedia, int budget) {
     if (value.isBlack() || f.isBlack()) return {};
-    const Spectrum T = transmittance(scene, shadow, medium, trackMedia);
+    Spectrum T;
+    if (budget < 0 || !scene.hasPassThroughSurfaces()) {
+        T = transmittance(scene, shadow, medium, trackMedia);
+    } else {
+        int crossed = 0;  // a shadow ray that is not blocked visits only surfaces it passes
+        T = walkTransmittance(
+            scene, shadow, medium, [&](const Intersection &, const Spectrum &) { ++crossed; }, trackMedia);
+        if (!withinBudget(crossed, budget)) return {};
+    }
     if (T.isBlack()) return {};
     return value * f * T * (ds.measure == Measure::Discrete ? 1.0 : powerHeuristic(ds.pdf, scatterPdf));
 }
@@ -91,6 +116,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
         if (medium && medium->sampleDistance(Ray(origin, ray.d, 0, segment), sampler.next1D(), ms)) {
             // Medium interaction: a scattering event with weight sigma_s * T / pdfSuccess.
             if (maxDepth_ >= 0 && depth >= maxDepth_) break;
+            const int budget = crossingBudget(maxDepth_, depth);
             throughput *= ms.sigmaS * ms.transmittance / ms.pdfSuccess;
             const PhaseFunction &phase = medium->phase();
             const Vec3 wi = -ray.d;
@@ -99,7 +125,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
             if (!value.isBlack())
                 L += throughput * directLight(scene, ds, value, Spectrum(phase.eval(wi, ds.d)), phase.pdf(wi, ds.d),
-                                              scene.spawnRayTo(ms.p, ds.p), medium, media_);
+                                              scene.spawnRayTo(ms.p, ds.p), medium, media_, budget);
 
             Vec3 wo;
             double phasePdf = 0;
@@ -108,7 +134,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             throughput *= weight;
             ray = Ray(ms.p, wo);
             origin = ms.p;
-            L += throughput * emissionAlong(scene, ray, ms.p, medium, media_, phasePdf, false, its);
+            L += throughput * emissionAlong(scene, ray, ms.p, medium, media_, phasePdf, false, its, budget);
         } else {
             if (medium) {
                 if (!(ms.pdfFailure > 0)) break;
@@ -120,11 +146,11 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             }
             if (!its.isValid()) break;
             const BSDF *bsdf = its.bsdf();
-            // Crossing a Null lobe is not a scattering event, so at the depth limit, and always at an
-            // index-matched boundary, the path may still pass through but not scatter.
-            const bool atLimit = maxDepth_ >= 0 && depth >= maxDepth_;
-            if (atLimit && !(bsdf->flags() & BSDFFlags::Null)) break;
-            const bool passOnly = atLimit || bsdf->isNull();
+            // At the depth limit even an index-matched boundary ends the path: crossing it would be one
+            // segment more (Mitsuba: "if (rRec.depth >= m_maxDepth) break" before any sampling).
+            if (maxDepth_ >= 0 && depth >= maxDepth_) break;
+            const int budget = crossingBudget(maxDepth_, depth);
+            const bool passOnly = bsdf->isNull();
             // Mitsuba's strictNormals: the geometric and shading normals must agree on the incident side.
             if (!passOnly && strictNormals_ && dot(ray.d, its.n) * Frame::cosTheta(its.wi) >= 0) break;
 
@@ -135,7 +161,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
                 if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0))
                     L += throughput * directLight(scene, ds, value, bsdf->eval(ctx, its, its.wi, wo),
                                                   bsdf->pdf(ctx, its, its.wi, wo), scene.spawnRayTo(its, ds.p),
-                                                  media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_);
+                                                  media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_, budget);
             }
 
             BSDFSample bs;
@@ -151,16 +177,18 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             origin = its.p;
             ray = scene.spawnRay(its, wo);
             if (bs.sampledType == BSDFFlags::Null) {
-                // Passing straight through: no scattering event, and the emission beyond was already
-                // counted from the previous vertex (its walks cross Null lobes), or will be counted by
-                // this loop if the path has not scattered yet.
+                // Passing straight through: not a scattering event, but one segment more (Mitsuba's
+                // volpath: "rRec.depth++; continue", without Russian roulette). The emission beyond was
+                // already counted from the previous vertex (its walks cross Null lobes within the same
+                // budget), or will be counted by this loop if the path has not scattered yet.
                 if (++crossings > kMaxCrossings) break;
+                ++depth;
                 its = Intersection();
                 scene.intersect(ray, its);
                 continue;
             }
             L += throughput * emissionAlong(scene, ray, origin, medium, media_, bs.pdf,
-                                            (bs.sampledType & BSDFFlags::Delta) != 0, its);
+                                            (bs.sampledType & BSDFFlags::Delta) != 0, its, budget);
         }
 
         // `its` now holds the first surface along the sampled direction, found by emissionAlong.

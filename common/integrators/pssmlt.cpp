@@ -17,7 +17,7 @@ PrimarySampleIntegrator::ChainSetup PSSMLT::setup(const Scene &scene, const Chai
     s.psi = [this, &scene, size](Sampler &u, SplatList &out) {
         const Vec2 unit = u.next2D(), position(unit.x * size.x, unit.y * size.y);
         bdpt().evaluate(scene, u, position, [&](const StrategySample &x) {
-            if (x.s + x.t - 1 >= minDepth()) out.push_back({x.raster, x.value});
+            if (x.depth >= minDepth()) out.push_back({x.raster, x.value});
         });
     };
     s.prefix = {raster.x / size.x, raster.y / size.y};

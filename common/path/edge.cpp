@@ -67,8 +67,8 @@ double failureProbability(const Medium &medium, const Ray &segment) {
 // it leaves the scene. With a target (Connect) it must reach the target. Medium segments run between the
 // points where the walk meets surfaces, not the offset origins of the spawned rays (as in visibility.cpp).
 WalkEnd walk(const Scene &scene, Sampler *sampler, Ray ray, Vec3 start, const Medium *medium, const Vec3 *target,
-             Spectrum &T, SegmentDensities &densities, EdgeEnd &end) {
-    for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
+             Spectrum &T, SegmentDensities &densities, EdgeEnd &end, int &crossings) {
+    for (crossings = 0; crossings < kMaxCrossings; ++crossings) {
         Intersection its;
         const bool hit = scene.intersect(ray, its);
         const double length = hit ? (its.p - start).length() : target ? (*target - start).length() : kInfinity;
@@ -117,7 +117,8 @@ WalkEnd walk(const Scene &scene, Sampler *sampler, Ray ray, Vec3 start, const Me
 }
 
 void fillEdge(PathEdge &edge, const Medium *medium, const Vec3 &d, const Spectrum &T, const SegmentDensities &densities,
-              bool startInMedium, bool endInMedium, TransportMode mode) {
+              bool startInMedium, bool endInMedium, TransportMode mode, int crossings) {
+    edge.crossings = crossings;
     edge.medium = medium;
     edge.d = d;
     edge.transmittance = T;
@@ -132,9 +133,10 @@ EdgeEnd traceEdge(const Scene &scene, Sampler &sampler, Ray ray, const Vec3 &sta
     EdgeEnd end;
     Spectrum T(1.0);
     SegmentDensities densities;
-    const WalkEnd result = walk(scene, &sampler, ray, start, medium, nullptr, T, densities, end);
+    int crossings = 0;
+    const WalkEnd result = walk(scene, &sampler, ray, start, medium, nullptr, T, densities, end, crossings);
     if (result == WalkEnd::Blocked) T = Spectrum(0.0);
-    fillEdge(edge, medium, ray.d, T, densities, startInMedium, result == WalkEnd::Medium, mode);
+    fillEdge(edge, medium, ray.d, T, densities, startInMedium, result == WalkEnd::Medium, mode, crossings);
     return end;
 }
 
@@ -143,8 +145,10 @@ bool connectEdge(const Scene &scene, Ray ray, const Vec3 &start, const Vec3 &tar
     EdgeEnd unused;
     Spectrum T(1.0);
     SegmentDensities densities;
-    if (walk(scene, nullptr, ray, start, medium, &target, T, densities, unused) != WalkEnd::Reached) return false;
-    fillEdge(edge, medium, ray.d, T, densities, startInMedium, endInMedium, mode);
+    int crossings = 0;
+    if (walk(scene, nullptr, ray, start, medium, &target, T, densities, unused, crossings) != WalkEnd::Reached)
+        return false;
+    fillEdge(edge, medium, ray.d, T, densities, startInMedium, endInMedium, mode, crossings);
     edge.length = (target - start).length();
     return !T.isBlack();
 }

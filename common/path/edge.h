@@ -4,8 +4,11 @@
 // with which each random walk crosses it and stops as it does (free-flight sampling in media: §1.4, "times
 // the probability of flying the whole distance d").
 //
-// Index-matched (Null) surfaces are not path vertices: like the path tracer, which does not count them
-// as scattering events, the layer folds them into the edge that crosses them.
+// Index-matched (Null) surfaces are not path vertices: the layer folds them into the edge that crosses
+// them, so that no strategy connects at one (Mitsuba's bidirectional layer marks them unconnectable and
+// collapses them, path.cpp "Collapse edges/vertices that were caused by BSDF::ENull interactions").
+// Mitsuba still counts each as a vertex of the path for maxDepth and rrDepth; the edge keeps how many it
+// crossed, so that pathDepth() (path.h) counts the same.
 #pragma once
 #include "bsdf/bsdf.h"
 #include "core/sampler.h"
@@ -34,6 +37,7 @@ struct PathEdge {
     // it ends at a medium vertex. 1 in vacuum; the emitter walk goes from the light side to the sensor
     // side of the edge.
     double pdf[2] = {1.0, 1.0};
+    int crossings = 0;  // index-matched surfaces crossed between the two vertices
 };
 
 // Where a traced edge ended.

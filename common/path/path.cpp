@@ -42,12 +42,14 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
     const Spectrum start = node.throughput;
     const bool lens = mode == TransportMode::Importance && !scene.sensor().deltaAperture();
     const int reverse = modeIndex(otherMode(mode));
-    for (int k = 0; maxVertices < 0 || k + 1 < maxVertices; ++k) {
+    // Edges so far plus the index-matched surfaces they crossed: the walk's depth in Mitsuba's count.
+    int depth = 0;
+    for (int k = 0; maxVertices < 0 || depth + 1 < maxVertices; ++k) {
         // Russian roulette on the throughput gathered since the endpoint, from rrDepth + 1 edges on, as
         // the path tracer does it. The survival probability divides the next vertex's throughput; MIS
         // ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
         double survival = 1.0;
-        if (k > rrDepth) {
+        if (depth > rrDepth) {
             survival = std::min((vertices_.back().throughput / start).max(), 0.95);
             if (sampler.next1D() >= survival) break;
         }
@@ -57,6 +59,9 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
         const bool sampled = vertices_[cur].sampleNext(scene, sampler, mode, &vertices_[cur - 1], edge, succ);
         if (lens && !edge.d.isZero()) recordLensHit(scene, k, edge, survival);
         if (!sampled) break;
+        depth += 1 + edge.crossings;
+        // A vertex beyond maxDepth belongs to no path that may contribute (its prefix is already too deep).
+        if (maxVertices >= 0 && depth + 1 > maxVertices) break;
         succ.throughput *= 1.0 / survival;
         if (k >= 1)
             vertices_[cur - 1].pdf[reverse] = vertices_[cur].evalPdf(
@@ -87,6 +92,12 @@ void Path::recordLensHit(const Scene &scene, int from, const PathEdge &edge, dou
     hit.vertex.throughput = v.throughput * v.eval(scene, &pred, hit.vertex, TransportMode::Importance) *
                             edgeTerm(v, hit.vertex, hit.edge) * hit.vertex.cosine(edge.d) / (pdf * survival);
     if (!hit.vertex.throughput.isBlack()) lensHits_.push_back(hit);
+}
+
+int pathDepth(const PathView &path) {
+    int depth = path.length() - 1;
+    for (int i = 0; i + 1 < path.length(); ++i) depth += path.edge(i).crossings;
+    return depth;
 }
 
 FullPath::FullPath(const PathView &view) {

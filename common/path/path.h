@@ -9,6 +9,11 @@
 // Random numbers: a walk draws from its sampler in vertex order (vertex.h lists the count per vertex),
 // so a subpath is a pure function of the sampler's stream and its first k vertices do not depend on
 // how long the walk runs. Russian roulette draws one more number per vertex from rrDepth edges on.
+//
+// Depth, as Mitsuba 0.6 counts it for maxDepth and rrDepth: the edges of a path plus the index-matched
+// surfaces they cross (edge.h), since Mitsuba's walks make a vertex of every such crossing
+// (libbidir/path.cpp randomWalk; bdpt_proc.cpp bridges at most maxDepth - s - t + 1 of them in a
+// connection).
 #pragma once
 #include <optional>
 #include <vector>
@@ -29,7 +34,8 @@ class Path {
 public:
     // Samples a walk of `mode` (Importance: from the emitters; Radiance: from the sensor, through raster
     // position `raster`) with at most maxVertices vertices (-1: unbounded) besides the supernode, and
-    // Russian roulette once the walk has rrDepth edges. The emitter walk records where it crosses a finite
+    // Russian roulette once the walk has rrDepth edges, both counted with the crossings of index-matched
+    // surfaces (a walk's depth + 1 vertices at most). The emitter walk records where it crosses a finite
     // lens. Along the way each vertex gets its reverse density (p of the other walk) as soon as its two
     // successors are known (ALGORITHMS.md §1.4).
     void sample(const Scene &scene, Sampler &sampler, TransportMode mode, int maxVertices, int rrDepth,
@@ -117,6 +123,10 @@ private:
     PathEdge junction_;  // between vertex(a - 1) and vertex(a)
     Spectrum value_;
 };
+
+// Mitsuba's depth of a complete path: its edges plus the index-matched surfaces they cross. maxDepth
+// bounds it in every integrator.
+int pathDepth(const PathView &path);
 
 // The measurement contribution f(x) of ALGORITHMS.md §1.1 as the product of the EVAL terms, each vertex
 // evaluated as the walk that sampled its successor evaluates it, or all in `mode`. The modes agree on

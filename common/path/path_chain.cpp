@@ -35,7 +35,8 @@ MutationCounts PathChain::mutationTypes(const std::vector<MutationType> &types) 
 }
 
 void PathChain::evaluate(State &state) const {
-    const int n = state.path.length();
+    // Vertices as Mitsuba counts them: the index-matched crossings are vertices of its paths (path.h).
+    const int n = pathDepth(state.path) + 1;
     const bool inRange = n >= minVertices_ && (maxVertices_ < 0 || n <= maxVertices_);
     state.f = inRange ? chainContribution(scene_, state.path) : Spectrum(0.0);
     state.target = state.f.luminance();

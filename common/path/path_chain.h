@@ -13,7 +13,8 @@ namespace pf {
 
 class PathChain final : public MarkovChain {
 public:
-    // pi is zero outside minVertices .. maxVertices vertices (maxVertices < 0: unbounded): paths left to
+    // pi is zero outside minVertices .. maxVertices vertices, index-matched crossings counted as vertices
+    // as Mitsuba does (pathDepth() + 1; maxVertices < 0: unbounded): paths left to
     // a separately rendered component, or beyond maxDepth. Deposits go to `film`, times `scale`.
     PathChain(const Scene &scene, const MutationSet &mutations, int minVertices, int maxVertices, ImageBlock &film,
               double scale);

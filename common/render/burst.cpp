@@ -54,7 +54,7 @@ std::vector<SeedCandidate> burstCandidates(const Scene &scene, const SeedingConf
         const Vec2 raster = samplePixel(film, pixel, sampler);
         config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
             const double weight = x.value.luminance();
-            if (x.s + x.t - 1 < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
+            if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
             candidates.push_back({{pixel, round, x.s, x.t}, weight});
         });
         ++samples;

@@ -55,7 +55,7 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
             config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
                 const int depth = x.s + x.t - 1;
                 const double weight = x.value.luminance() * perSample;
-                if (depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
+                if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
                 result.candidates.push_back({{pixel, sampleIndex, x.s, x.t}, weight});
                 if (result.depthLuminance.size() <= static_cast<size_t>(depth))
                     result.depthLuminance.resize(static_cast<size_t>(depth) + 1, 0.0);

@@ -27,8 +27,8 @@ struct SeedCandidate {
 struct SeedingConfig {
     const BDPT *bdpt = nullptr;
     int64_t samplesPerPixel = 1;
-    // Strategies of paths with fewer edges are left out (the component rendered without chains, as with
-    // Mitsuba's directSamples); 1 keeps every path.
+    // Strategies of paths of smaller depth (edges plus index-matched crossings, path.h) are left out (the
+    // component rendered without chains, as with Mitsuba's directSamples); 1 keeps every path.
     int minDepth = 1;
 };
 
@@ -43,8 +43,9 @@ struct SeedingTask {
 
 struct SeedingResult {
     std::vector<SeedCandidate> candidates;  // in pixel, sample, strategy order; zero weights left out
-    std::vector<double> depthLuminance;     // sum of the candidates' weights per path depth s + t - 1
-    uint64_t samples = 0;                   // BDPT samples taken
+    // Sum of the candidates' weights per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
+    std::vector<double> depthLuminance;
+    uint64_t samples = 0;  // BDPT samples taken
     uint64_t rays = 0;
     double seconds = 0;
 };

@@ -1,5 +1,6 @@
 #include "scene/properties.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "texture/texture.h"
@@ -198,26 +199,37 @@ std::shared_ptr<Texture> Properties::getTexture(const std::string &name) const {
     return std::make_shared<ConstantTexture>(getSpectrum(name));
 }
 
+void Properties::checkUsed(UnusedParameters &unused) const {
+    // In file order, so that under --strict the error is the first leftover a reader scanning the element
+    // would find, and the warnings read top to bottom.
+    struct Leftover {
+        const SourceLocation *loc;
+        const std::string *name;  // a parameter; nullptr for a child
+        const Child *child;
+    };
+    std::vector<Leftover> leftovers;
+    for (const auto &[name, e] : values_)
+        if (!e.used) leftovers.push_back({&e.loc, &name, nullptr});
+    for (const Child &c : children_)
+        if (!c.used) leftovers.push_back({&c.loc, nullptr, &c});
+    std::stable_sort(leftovers.begin(), leftovers.end(),
+                     [](const Leftover &a, const Leftover &b) { return a.loc->line < b.loc->line; });
+    for (const Leftover &l : leftovers) {
+        if (l.name) {
+            unused.report(*l.loc, pluginName_, *l.name);
+            continue;
+        }
+        // Mitsuba 0.6 refuses a child that a plugin does not take (ConfigurableObject::addChild).
+        const Child &c = *l.child;
+        throw SceneError(*l.loc, pluginName_ + ": cannot use the nested <" + objectKindName(c.kind) + ">" +
+                                     (c.name.empty() ? "" : " named '" + c.name + "'") +
+                                     (c.object->id().empty() ? "" : " (id '" + c.object->id() + "')"));
+    }
+}
+
 void Properties::checkAllUsed() const {
-    // Report the unused item that comes first in the file, which is what a reader scanning the
-    // element would find first.
-    const SourceLocation *first = nullptr;
-    std::string what;
-    for (const auto &[name, e] : values_) {
-        if (!e.used && (!first || e.loc.line < first->line)) {
-            first = &e.loc;
-            what = "unknown parameter '" + name + "'";
-        }
-    }
-    for (const Child &c : children_) {
-        if (!c.used && (!first || c.loc.line < first->line)) {
-            first = &c.loc;
-            what = std::string("cannot use the nested <") + objectKindName(c.kind) + ">" +
-                   (c.name.empty() ? "" : " named '" + c.name + "'") +
-                   (c.object->id().empty() ? "" : " (id '" + c.object->id() + "')");
-        }
-    }
-    if (first) throw SceneError(*first, pluginName_ + ": " + what);
+    UnusedParameters strict(true);
+    checkUsed(strict);
 }
 
 void Properties::fail(const std::string &name, const std::string &msg) const {

@@ -1,6 +1,7 @@
 // Parameters of one plugin instance as written in the scene file (Mitsuba's Properties). Every getter
-// marks the parameter as used; after construction the loader calls checkAllUsed(), so a misspelt or
-// unknown parameter is an error that names the parameter, the plugin and the line.
+// marks the parameter as used; after construction the loader calls checkUsed(), so a misspelt or
+// unknown parameter is a warning (an error under --strict) that names the parameter, the plugin and the
+// line, and a nested object the plugin cannot take is an error (as Mitsuba's addChild).
 #pragma once
 #include <map>
 #include <memory>
@@ -12,6 +13,7 @@
 #include "core/spectrum.h"
 #include "core/transform.h"
 #include "scene/object.h"
+#include "scene/unused_parameters.h"
 
 namespace pf {
 
@@ -86,7 +88,10 @@ public:
     std::shared_ptr<Texture> getTexture(const std::string &name, const Spectrum &def) const;
     std::shared_ptr<Texture> getTexture(const std::string &name) const;
 
-    // Throw SceneError naming the first parameter or child that no getter asked for.
+    // Goes through the parameters and children that no getter asked for, in file order: an unused
+    // parameter goes to `unused` (a warning, or an error when strict); an unused child is an error.
+    void checkUsed(UnusedParameters &unused) const;
+    // checkUsed() with a strict sink: throws SceneError naming the first unused parameter or child.
     void checkAllUsed() const;
 
     // Raise a SceneError at a parameter's location: "<plugin>: parameter 'name': msg".

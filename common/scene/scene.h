@@ -34,6 +34,9 @@ public:
         sensor_->configure(*this);
     }
     void setIntegratorProperties(Properties p) { integratorProps_ = std::move(p); }
+    // Warnings of the load (unused parameters), in file order, for the caller to show.
+    void setWarnings(std::vector<SceneWarning> w) { warnings_ = std::move(w); }
+    const std::vector<SceneWarning> &warnings() const { return warnings_; }
     // Builds the BVH, configures emitters/sensor and the emitter-selection distribution.
     // Throws SceneError if there is no sensor.
     void finalize();
@@ -90,14 +93,17 @@ private:
     const Emitter *environment_ = nullptr;
     std::shared_ptr<Sensor> sensor_;
     Properties integratorProps_;
+    std::vector<SceneWarning> warnings_;
     Distribution1D emitterDist_;
     AABB bounds_;
     bool passThrough_ = false;
 };
 
 // Loads a Mitsuba 0.5/0.6 XML scene. `defines` supplies values for $name parameters (CLI -D), overriding
-// <default> elements. Throws SceneError with file and line on any problem.
+// <default> elements. Throws SceneError with file and line on any problem; a parameter that its plugin
+// does not use is one too when `strict`, else a warning in Scene::warnings() (as Mitsuba 0.6).
 std::unique_ptr<Scene> loadScene(const std::string &path,
-                                 const std::vector<std::pair<std::string, std::string>> &defines = {});
+                                 const std::vector<std::pair<std::string, std::string>> &defines = {},
+                                 bool strict = false);
 
 }  // namespace pf

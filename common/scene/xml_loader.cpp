@@ -195,8 +195,9 @@ struct NamedObject {
 
 class Loader {
 public:
-    Loader(Scene &scene, const std::vector<std::pair<std::string, std::string>> &defines, std::string rootDir)
-        : scene_(scene), rootDir_(std::move(rootDir)) {
+    Loader(Scene &scene, const std::vector<std::pair<std::string, std::string>> &defines, std::string rootDir,
+           UnusedParameters &unused)
+        : scene_(scene), rootDir_(std::move(rootDir)), unused_(unused) {
         for (const auto &[name, value] : defines) params_[name] = value;
     }
 
@@ -226,6 +227,7 @@ private:
 
     Scene &scene_;
     std::string rootDir_;
+    UnusedParameters &unused_;
     std::map<std::string, std::string> params_;
     std::map<std::string, NamedObject> objects_;
     std::vector<std::string> includeStack_;
@@ -484,7 +486,7 @@ std::shared_ptr<Object> Loader::parseObject(const Element &e, ObjectKind kind, c
     std::shared_ptr<Object> obj;
     try {
         obj = (*factory)(props, LoadContext{file.dir, rootDir_});
-        props.checkAllUsed();
+        props.checkUsed(unused_);
     } catch (const SceneError &err) {
         // Errors located in this XML file are already precise; others (a mesh or image reader's
         // "file:line" in the asset, or no location at all) get the element's location prefixed.
@@ -686,13 +688,15 @@ void Loader::finish(const SourceLocation &sceneLoc) {
 }  // namespace
 
 std::unique_ptr<Scene> loadScene(const std::string &path,
-                                 const std::vector<std::pair<std::string, std::string>> &defines) {
+                                 const std::vector<std::pair<std::string, std::string>> &defines, bool strict) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw SceneError(SourceLocation{path, 0}, "scene file not found");
     const fs::path abs = fs::absolute(path).lexically_normal();
     auto scene = std::make_unique<Scene>();
-    Loader loader(*scene, defines, abs.parent_path().string());
+    UnusedParameters unused(strict);
+    Loader loader(*scene, defines, abs.parent_path().string(), unused);
     loader.finish(loader.parseFile(abs.string(), path));
+    scene->setWarnings(unused.warnings());
     return scene;
 }
 

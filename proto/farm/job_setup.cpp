@@ -35,7 +35,8 @@ void applyParams(Properties &props, const NameValues &params) {
 
 }  // namespace
 
-std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string &requested, const NameValues &params) {
+std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string &requested, const NameValues &params,
+                                           bool strict, std::vector<SceneWarning> *warnings) {
     const Properties &fileProps = scene.integratorProperties();
     const std::string fileType = fileProps.pluginName().empty() ? "path" : fileProps.pluginName();
     const std::string type = requested.empty() ? fileType : requested;
@@ -47,7 +48,11 @@ std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string
             if (fileProps.has(shared))
                 props.set(shared, fileProps.type(shared), fileProps.value(shared), fileProps.locationOf(shared));
     applyParams(props, params);
-    return createIntegrator(type, props, true);
+    auto integrator = createIntegrator(type, props, false);
+    UnusedParameters unused(strict);
+    props.checkUsed(unused);
+    if (warnings) warnings->insert(warnings->end(), unused.warnings().begin(), unused.warnings().end());
+    return integrator;
 }
 
 }  // namespace pf

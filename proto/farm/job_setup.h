@@ -19,10 +19,13 @@ using NameValues = std::vector<std::pair<std::string, std::string>>;
 NameValues parseNameValues(const std::vector<std::string> &args, const std::string &flag);
 
 // The integrator a job uses: `requested` ("" = the scene file's, which defaults to "path"). The file's
-// parameters are checked strictly when they were written for this integrator; when another one is
-// requested, the parameters shared by every integrator (maxDepth, rrDepth, ...) carry over and the rest
-// is ignored. `params` replace the file's values, typed like the scene file would type them (boolean,
-// integer, float, else string). Throws SceneError for unknown integrators or bad parameters.
-std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string &requested, const NameValues &params);
+// parameters are checked when they were written for this integrator; when another one is requested, the
+// parameters shared by every integrator (maxDepth, rrDepth, ...) carry over and the rest is ignored.
+// `params` replace the file's values, typed like the scene file would type them (boolean, integer,
+// float, else string). Throws SceneError for unknown integrators or bad parameters. A parameter (from the
+// file or -P) that the integrator does not use is an error when `strict`, else a warning appended to
+// `warnings` (dropped when null), as the scene loader does for every other plugin.
+std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string &requested, const NameValues &params,
+                                           bool strict = false, std::vector<SceneWarning> *warnings = nullptr);
 
 }  // namespace pf
