@@ -120,7 +120,7 @@ uint64_t sumProposed(const pf::MutationCounts &counts, bool accepted) {
 pf::ChainImage chainsOnOneCore(const pf::Scene &scene, const pf::ChainIntegrator &chains, int64_t spp) {
     std::vector<pf::SeedingResult> seeding;
     for (const pf::SeedingTask &task : chains.seedingTasks(scene))
-        seeding.push_back(pf::runSeedingTask(scene, chains.seeding(scene), 1, task));
+        seeding.push_back(chains.runSeeding(scene, 0, 1, task));
     const pf::Normalizer normalizer(std::move(seeding));
     pf::ChainImage image(pf::makeFilmBlock(scene));
     const std::clock_t cpu = std::clock();

@@ -41,7 +41,7 @@ void throughput(const pf::Scene &scene, const pf::ChainIntegrator &integrator, i
     auto start = std::chrono::steady_clock::now();
     std::vector<pf::SeedingResult> seeds;
     for (const pf::SeedingTask &t : integrator.seedingTasks(scene))
-        seeds.push_back(pf::runSeedingTask(scene, integrator.seeding(scene), 1, t));
+        seeds.push_back(integrator.runSeeding(scene, 0, 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
     const double seeding = secondsSince(start);
     pf::ChainImage image(pf::makeFilmBlock(scene));

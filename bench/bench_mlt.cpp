@@ -65,7 +65,7 @@ pf::ChainImage runChains(const pf::Scene &scene, const pf::ChainIntegrator &inte
                          double &chainSeconds) {
     std::vector<pf::SeedingResult> seeds;
     for (const pf::SeedingTask &t : integrator.seedingTasks(scene))
-        seeds.push_back(pf::runSeedingTask(scene, integrator.seeding(scene), 1, t));
+        seeds.push_back(integrator.runSeeding(scene, 0, 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
     pf::ChainImage image(pf::makeFilmBlock(scene));
     const auto start = std::chrono::steady_clock::now();

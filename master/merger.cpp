@@ -284,6 +284,7 @@ void Master::finishIfComplete(JobRuntime &j) {
     image.metadata["pathfarm.scene"] = j.record.scene_file();
     image.metadata["pathfarm.job"] = std::to_string(j.record.id());
     image.metadata["pathfarm.tasks"] = std::to_string(f.merged);
+    if (j.record.chain().lambda() > 0) image.metadata["pathfarm.lambda"] = std::to_string(j.record.chain().lambda());
     if (spec.budget().has_time_seconds())
         image.metadata["pathfarm.timeBudget"] = std::to_string(spec.budget().time_seconds());
     writeEXR((fs::path(jobDir(j.record.id())) / "image.exr").string(), image);

@@ -194,7 +194,7 @@ TEST(ERPTChains, PilotLuminanceDoesNotChangeTheExpectation) {
     const BlockStats &reference = bdptReference("cornell-box", *scene, 8, 16, 64, 0);
     for (const double factor : {0.5, 2.0}) {
         const BlockStats scaled = blockStatsOf(*scene, 8, 16, 2, [&](uint64_t seed) {
-            SeedingResult pilot = runSeedingTask(*scene, erpt.seeding(*scene), seed, erpt.seedingTasks(*scene).at(0));
+            SeedingResult pilot = erpt.runSeeding(*scene, 8, seed, erpt.seedingTasks(*scene).at(0));
             for (double &l : pilot.depthLuminance) l *= factor;
             std::vector<SeedingResult> results;
             results.push_back(std::move(pilot));

@@ -271,8 +271,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
     if (task.has_seeding()) {
         // The job's spp budget, as the master's ChainJob saw it (0: a time budget or the scene's sampleCount).
         const int64_t spp = task.job().budget().kind_case() == v1::Budget::kSpp ? task.job().budget().spp() : 0;
-        const SeedingResult s =
-            runSeedingTask(*p.scene, chain->seeding(*p.scene, spp), seed, farm::fromProto(task.seeding()));
+        const SeedingResult s = chain->runSeeding(*p.scene, spp, seed, farm::fromProto(task.seeding()));
         r.payload = farm::encodeSeedingResult(s);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(s.samples, s.rays, s.seconds);
     } else if (task.has_chain()) {

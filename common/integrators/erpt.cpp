@@ -4,7 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "integrators/lambda_tuning.h"
 #include "render/normalizer.h"
+#include "render/pilot.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -45,6 +47,14 @@ BurstPlan ERPT::plan(const Scene &scene, int64_t spp) const {
     return burstPlan(scene, numChains_ / static_cast<double>(rounds), chainLength_, passMutations_);
 }
 
+SeedingResult ERPT::runSeeding(const Scene &scene, int64_t, uint64_t seed, const SeedingTask &task) const {
+    if (!lambdaAuto()) return runPilot(scene, seeding(scene), seed, task.pilotSamples);
+    SeedingResult pilot = runPilot(scene, seeding(scene), seed, task.pilotSamples, true);
+    pilot.lambda = tuneLambda(scene, *this, pilotSeed(seed), pilot.candidates);
+    pilot.candidates.clear();  // the pilot ships luminance sums and λ only
+    return pilot;
+}
+
 double ERPT::expectedChains(double candidateWeight, double meanLuminance, double chainsPerPixel) const {
     const double nu = meanLuminance > 0 ? chainsPerPixel * candidateWeight / meanLuminance : chainsPerPixel;
     return maxChains_ > 0 ? std::min(nu, static_cast<double>(maxChains_)) : nu;
@@ -61,6 +71,7 @@ ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint
     task.index = index;
     task.mutations = static_cast<uint64_t>(chainLength_);
     task.depthLuminance = normalizer.depthLuminance();
+    task.lambda = normalizer.lambda();
     task.burst =
         BurstPass{index / p.blocks, index % p.blocks, normalizer.luminance() / static_cast<double>(p.pixels), p};
     return task;

@@ -41,8 +41,17 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
         const bool byDefault = std::find(defaults.begin(), defaults.end(), type) != defaults.end();
         if (props.getBool(mutationParameter(type), byDefault)) types_.push_back(type);
     }
-    // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda.
-    lambda_ = props.getFloat("probFactor", props.getFloat("lambda", 50));
+    // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda; either may
+    // be "auto" here (tuned by the luminance pilot of erpt and mept).
+    for (const char *name : {"lambda", "probFactor"}) {
+        if (!props.has(name)) continue;
+        lambdaAuto_ = props.type(name) == Properties::Type::String;
+        if (!lambdaAuto_) {
+            lambda_ = props.getFloat(name);
+        } else if (props.getString(name) != "auto") {
+            props.fail(name, "must be a positive number or \"auto\"");
+        }
+    }
     if (!(lambda_ > 0) || !std::isfinite(lambda_)) props.fail("lambda", "must be positive");
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
@@ -61,7 +70,11 @@ SeedingConfig PathSpaceIntegrator::seedingWith(int64_t samplesPerPixel) const {
     return {bdpt_.get(), samplesPerPixel, minVertices() - 1};
 }
 
-MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
+bool PathSpaceIntegrator::usesManifoldPerturbation() const {
+    return std::find(types_.begin(), types_.end(), MutationType::Manifold) != types_.end();
+}
+
+MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) const {
     const PerturbationScale scale(scene);
     MutationSet set;
     for (const MutationType type : types_) switch (type) {
@@ -81,7 +94,7 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene) const {
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
             case MutationType::Manifold:
-                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda_, glossyAngle_));
+                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_));
                 break;
         }
     return set;
@@ -93,12 +106,14 @@ void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const C
     // The chain starts on the resampled candidate itself (ALGORITHMS.md §2.4), regenerated from its record.
     MutablePath start;
     bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });
-    const MutationSet set = mutations(scene);
+    const MutationSet set = mutations(scene, task.lambda);
     PathChain chain(scene, set, minVertices(), maxVertices(), film, scale);
     // A candidate carries energy, so its path does; pi = 0 could only come from round-off in re-evaluating
     // a Dirac vertex from the other side, and such a start is left out rather than divided by.
     if (start.length() > 0 && chain.start(start) > 0) runMetropolis(chain, task.mutations, rng, nullptr, counts);
     for (size_t k = 0; k < set.size(); ++k) set[k].addCounters(counters);
+    // A tuned jump size is reported with the chains' statistics (and in the image's metadata).
+    if (task.lambda > 0) addCounters(counters, {{"lambda", task.lambda, ChainCounter::Merge::Max}});
 }
 
 namespace {
@@ -117,6 +132,7 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
     : PathSpaceIntegrator(props, mltDefaults(manifoldExploration)), manifoldExploration_(manifoldExploration) {
     luminanceSamples_ = props.getInt("luminanceSamples", 100000);
     if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
+    if (lambdaAuto()) props.fail("lambda", "\"auto\" is for erpt and mept (their luminance pilot tunes it)");
     if (props.getBool("twoStage", false))
         props.fail("twoStage", "two-stage MLT is not implemented (leave twoStage false)");
 }

@@ -16,7 +16,7 @@
 //   lensSubpathMutation (true)     Veach's lens subpath mutation (not in Mitsuba 0.6, which dropped it)
 //   manifoldPerturbation (false)   manifold exploration's manifold perturbation (path/manifold_perturbation.h)
 //   lambda (50)                    the manifold perturbation's jump size (Mitsuba also reads probFactor,
-//                                  which takes precedence)
+//                                  which takes precedence); erpt and mept also take "auto" (erpt.h)
 //   manifoldGlossyAngle (1)        dtheta of the manifold perturbation's glossy classification, in degrees:
 //                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
 //                                  value); 0 leaves every glossy vertex non-specular
@@ -50,8 +50,13 @@ public:
     const SamplingIntegrator *directIntegrator() const override { return direct_.get(); }
     int64_t directSamples() const override { return directSamples_; }
 
-    // The enabled mutations, in mutationTypes() order, with their step sizes for `scene`.
-    MutationSet mutations(const Scene &scene) const;
+    // The enabled mutations, in mutationTypes() order, with their step sizes for `scene`; the manifold
+    // perturbation's jump size `lambda` (0: the integrator's).
+    MutationSet mutations(const Scene &scene, double lambda = 0) const;
+    // lambda = "auto": the jump size is tuned by the luminance pilot (integrators/erpt.h).
+    bool lambdaAuto() const { return lambdaAuto_; }
+    double lambda() const { return lambda_; }
+    bool usesManifoldPerturbation() const;
     const BDPT &bdpt() const { return *bdpt_; }
     // Chains leave paths with fewer vertices to the direct component.
     int minVertices() const { return directSamples_ >= 0 ? 4 : 2; }
@@ -69,6 +74,7 @@ private:
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
     double lambda_ = 50, glossyAngle_ = 0;
+    bool lambdaAuto_ = false;
     std::vector<MutationType> types_;
 };
 

@@ -95,6 +95,10 @@ ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, 
 
 uint64_t chainTaskMutations(const Scene &scene) { return std::max(kMinTaskMutations, cropPixels(scene)); }
 
+SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed, const SeedingTask &task) const {
+    return runSeedingTask(scene, seeding(scene, spp), seed, task);
+}
+
 std::vector<SeedingTask> ChainIntegrator::seedingTasks(const Scene &scene) const { return pf::seedingTasks(scene); }
 
 std::vector<ChainSeed> ChainIntegrator::taskSeeds(const Scene &, uint64_t, const ChainTask &task, uint64_t &) const {
@@ -141,7 +145,7 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
     progress.update(0, "seeding");
     std::vector<SeedingResult> seeds(job.seedingTaskCount());
     parallelFor(seeds.size(), threads,
-                [&](size_t i) { seeds[i] = runSeedingTask(scene, job.seedingConfig(), opt.seed, job.seedingTask(i)); });
+                [&](size_t i) { seeds[i] = runSeeding(scene, spp, opt.seed, job.seedingTask(i)); });
     for (SeedingResult &r : seeds) {
         stats.rays += r.rays;
         job.mergeSeeding(std::move(r));

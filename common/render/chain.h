@@ -38,6 +38,8 @@ struct ChainTask {
     std::vector<double> depthLuminance;
     // Bursts: the pass and block whose seeds the task samples itself (render/burst.h); `seeds` is empty.
     std::optional<BurstPass> burst;
+    // The manifold perturbation's jump size as the pilot tuned it (lambda=auto); 0: the integrator's.
+    double lambda = 0;
 };
 
 struct ChainResult {
@@ -82,6 +84,8 @@ public:
     virtual ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                                 uint64_t index) const;
     virtual uint64_t chainsPerTask(const Scene &) const { return 1; }
+    // Runs seeding task `task` of a job of `spp`: by default runSeedingTask with seeding(scene, spp).
+    virtual SeedingResult runSeeding(const Scene &scene, int64_t spp, uint64_t seed, const SeedingTask &task) const;
     // The seeding tasks of a job: by default blocks of pixels (render/seeding.h) whose candidates form the
     // pool of chain starts; burst integrators run the luminance pilot alone (render/pilot.h).
     virtual std::vector<SeedingTask> seedingTasks(const Scene &scene) const;

@@ -16,6 +16,7 @@ Normalizer::Normalizer(std::vector<SeedingResult> results) {
         pool_.insert(pool_.end(), r.candidates.begin(), r.candidates.end());
         if (depthLuminance_.size() < r.depthLuminance.size()) depthLuminance_.resize(r.depthLuminance.size(), 0.0);
         for (size_t d = 0; d < r.depthLuminance.size(); ++d) depthLuminance_[d] += r.depthLuminance[d];
+        if (r.lambda > 0) lambda_ = r.lambda;
     }
     cumulative_.reserve(pool_.size() + 1);
     cumulative_.push_back(0.0);

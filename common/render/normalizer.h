@@ -29,6 +29,8 @@ public:
     double luminance() const { return luminance_; }
     const std::vector<double> &depthLuminance() const { return depthLuminance_; }
     const std::vector<SeedCandidate> &candidates() const { return pool_; }
+    // The jump size a seeding result tuned (lambda=auto), 0 if none did.
+    double lambda() const { return lambda_; }
 
     // The starts of the `count` long chains of task `taskIndex` (weight 1: the merge rule applies W / K);
     // none when the pool carries no energy.
@@ -42,6 +44,7 @@ private:
     std::vector<double> cumulative_;  // cumulative_[i] = sum of the weights before candidate i (size + 1)
     std::vector<double> depthLuminance_;
     double luminance_ = 0;
+    double lambda_ = 0;
 };
 
 // The merged chain films of a render (or of a farm job so far).

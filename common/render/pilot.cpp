@@ -11,12 +11,14 @@ namespace pf {
 namespace {
 
 constexpr uint64_t kPilotSeedTag = 0x9170bULL;
+constexpr uint64_t kStrataStream = 0x57a7aULL;
 
 }  // namespace
 
 uint64_t pilotSeed(uint64_t jobSeed) { return hashCombine(jobSeed, kPilotSeedTag); }
 
-SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples) {
+SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples,
+                       bool keep) {
     const auto start = std::chrono::steady_clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
     const Film &film = scene.sensor().film();
@@ -25,17 +27,18 @@ SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t
     const uint64_t seed = pilotSeed(jobSeed);
     SeedingResult result;
     IndependentSampler sampler;
+    PCG32 strata(seed, kStrataStream);
     for (uint64_t j = 0; j < samples; ++j) {
-        sampler.start(seed, j, 0);
         // Stratum j of the pixels, [j, j + 1) * pixels / samples, a uniform position in it.
-        const double u = (static_cast<double>(j) + sampler.next1D()) * perSample;
-        const uint64_t crop = std::min(pixels - 1, static_cast<uint64_t>(u));
-        const uint64_t pixel = filmPixel(film, crop);
+        const double u = (static_cast<double>(j) + strata.nextDouble()) * perSample;
+        const uint64_t pixel = filmPixel(film, std::min(pixels - 1, static_cast<uint64_t>(u)));
+        sampler.start(seed, pixel, j);
         const Vec2 raster = samplePixel(film, pixel, sampler);
         config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
             const int depth = x.s + x.t - 1;
             const double weight = x.value.luminance() * perSample;
             if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
+            if (keep) result.candidates.push_back({{pixel, j, x.s, x.t}, weight});
             if (result.depthLuminance.size() <= static_cast<size_t>(depth))
                 result.depthLuminance.resize(static_cast<size_t>(depth) + 1, 0.0);
             result.depthLuminance[static_cast<size_t>(depth)] += weight;

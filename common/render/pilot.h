@@ -9,10 +9,11 @@
 // pool; a pilot in its own random stream needs nothing but its own samples, so bursts can run block by
 // block and pass by pass (render/burst.h) with memory bounded by the blocks in flight.
 //
-// The pilot takes `samples` BDPT samples, sample j at a uniform position in the j-th of `samples` equal
-// strata of the crop window's pixels (stratified, so few samples still cover the image), each with the
-// render loop's sampler seeded by (pilot seed, j). The sum of every strategy's luminance of a sample, light
-// tracing included, times pixels / samples, is an unbiased estimate of the image's total luminance b̂.
+// The pilot takes `samples` BDPT samples, sample j in a pixel drawn uniformly from the j-th of `samples`
+// equal strata of the crop window's pixels (stratified, so few samples still cover the image), with the
+// render loop's sampler seeded by (pilot seed, pixel, j), so that its paths regenerate from PathRecords with
+// the pilot seed (BDPT::regenerate). The sum of every strategy's luminance of a sample, light tracing
+// included, times pixels / samples, is an unbiased estimate of the image's total luminance b̂.
 #pragma once
 #include <cstdint>
 
@@ -23,8 +24,10 @@ namespace pf {
 // The pilot's seed: a stream apart from the seeds', the chains' and the direct component's.
 uint64_t pilotSeed(uint64_t jobSeed);
 
-// Returns no candidates: depthLuminance holds b̂ per path depth (paths shorter than config.minDepth left out,
-// as in seeding), samples the BDPT samples taken.
-SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples);
+// depthLuminance holds b̂ per path depth (paths shorter than config.minDepth left out, as in seeding),
+// samples the BDPT samples taken; candidates the pilot's paths with their share of b̂ when `keep` (records
+// that regenerate with pilotSeed(jobSeed), for tuning the chains on them: integrators/erpt.h), else none.
+SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples,
+                       bool keep = false);
 
 }  // namespace pf

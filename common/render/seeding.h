@@ -46,6 +46,7 @@ struct SeedingResult {
     // Sum of the candidates' weights per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
     std::vector<double> depthLuminance;
     uint64_t samples = 0;  // BDPT samples taken
+    double lambda = 0;     // the luminance pilot's tuned jump size of the manifold perturbation (0: none)
     uint64_t rays = 0;
     double seconds = 0;
 };

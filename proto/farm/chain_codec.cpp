@@ -92,6 +92,7 @@ v1::ChainTask toProto(const ChainTask &task) {
     out.set_index(task.index);
     for (const ChainSeed &s : task.seeds) addRecord(*out.mutable_seeds(), s.record, s.weight);
     out.set_mutations(task.mutations);
+    out.set_lambda(task.lambda);
     for (const double l : task.depthLuminance) out.add_depth_luminance(l);
     if (task.burst) {
         v1::BurstPass *b = out.mutable_burst();
@@ -113,6 +114,8 @@ ChainTask fromProto(const v1::ChainTask &task) {
     });
     out.mutations = task.mutations();
     out.depthLuminance = finiteValues(task.depth_luminance(), "chain task");
+    if (!std::isfinite(task.lambda()) || task.lambda() < 0) throw FarmError("chain task: a bad jump size lambda");
+    out.lambda = task.lambda();
     if (task.has_burst()) {
         const v1::BurstPass &b = task.burst();
         if (!std::isfinite(b.mean_luminance()) || b.mean_luminance() < 0)
@@ -144,6 +147,7 @@ std::string encodeSeedingResult(const SeedingResult &result) {
     for (const SeedCandidate &c : result.candidates) addRecord(*out.mutable_candidates(), c.record, c.weight);
     for (const double l : result.depthLuminance) out.add_depth_luminance(l);
     out.set_samples(result.samples);
+    out.set_lambda(result.lambda);
     out.set_rays(result.rays);
     out.set_seconds(result.seconds);
     return out.SerializeAsString();
@@ -168,6 +172,8 @@ SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, co
         out.candidates.push_back({r, weight});
     });
     out.depthLuminance = finiteValues(in.depth_luminance(), "seeding result");
+    if (!std::isfinite(in.lambda()) || in.lambda() < 0) throw FarmError("seeding result: a bad jump size lambda");
+    out.lambda = in.lambda();
     out.samples = in.samples();
     out.rays = in.rays();
     out.seconds = in.seconds();

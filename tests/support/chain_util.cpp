@@ -13,7 +13,7 @@ namespace pf::test {
 Normalizer seedChains(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed) {
     std::vector<SeedingResult> seeds;
     for (const SeedingTask &t : integrator.seedingTasks(scene))
-        seeds.push_back(runSeedingTask(scene, integrator.seeding(scene), seed, t));
+        seeds.push_back(integrator.runSeeding(scene, 0, seed, t));
     return Normalizer(std::move(seeds));
 }
 
