@@ -306,13 +306,13 @@ TEST(SunRadiance, ValuesAndTrends) {
 // the disk's edge cuts them),
 // and one more cell for everything outside the cap. For a density as narrow as the sun's.
 Chi2Result capChi2(const DirectionSampler &sample, const DirectionPdf &pdf, const Vec3 &axis, double capAngle,
-                   int rings, int sectors, int sampleCount = 200000) {
+                   int rings, int sectors, uint64_t seed = 41, int sampleCount = 200000) {
     constexpr int ringRes = 256, sectorRes = 4;
     const Frame frame(axis);
     const double oneMinusCosCap = 2 * std::pow(std::sin(0.5 * capAngle), 2);
     const int cells = rings * sectors;
     std::vector<double> observed(cells + 1, 0.0), expected(cells + 1, 0.0);
-    PCG32 rng(41, 7);
+    PCG32 rng(seed, 7);
     for (int i = 0; i < sampleCount; ++i) {
         Vec3 d;
         if (!sample(rng, d)) continue;
@@ -402,7 +402,10 @@ TEST(SkyEmitter, SamplingChiSquare) {
     EXPECT_NEAR(direct.integratedMass, 1.0, 2e-3);
     PositionSample ps;
     e->samplePosition(ps, {0.4, 0.1});
-    const auto emitted = emissionChi2(*e, ps, emitterChi2Options(kChi2Tests, 32, 32, 40));
+    // Another seed: with the same one, emission would draw the mirror images of the same directions.
+    Chi2Options emissionOptions = emitterChi2Options(kChi2Tests, 32, 32, 40);
+    emissionOptions.seed = 2;
+    const auto emitted = emissionChi2(*e, ps, emissionOptions);
     EXPECT_TRUE(emitted.passed) << emitted.report;
     std::printf("sky sampling chi-square: p = %.3f (next-event), p = %.3f (emission)\n", direct.pValue, emitted.pValue);
 }
@@ -430,7 +433,7 @@ TEST(SunEmitter, SamplingChiSquareInTheDisk) {
                 ds.d = d;
                 return e->pdfDirection(ds, ps);
             },
-            -sunDir, 1.3 * halfAngle, 12, 12);
+            -sunDir, 1.3 * halfAngle, 12, 12, 42);
         EXPECT_TRUE(emitted.passed) << emitted.report;
         std::printf("sun (sunRadiusScale %.0f) sampling chi-square: p = %.3f (next-event), p = %.3f (emission)\n",
                     radiusScale, r.pValue, emitted.pValue);
@@ -551,6 +554,35 @@ TEST(SunSkyParameters, DirectionalSun) {
     ASSERT_EQ(parts.size(), 1u);
     EXPECT_TRUE(parts[0]->isDelta());
     EXPECT_FALSE(sunsky->isDelta());
+}
+
+// skyScale and sunScale weigh the two parts of sunsky, which are exactly `sky` and `sun` of the same
+// parameters; stretch moves the sun to stretch times its zenith angle.
+TEST(SunSkyParameters, ScalesAndStretch) {
+    const auto make = [](const std::string &plugin, const std::vector<std::pair<std::string, double>> &floats) {
+        Properties p = sunProperties(plugin, kToWorld, 1);
+        if (plugin == "sky") p.remove("sunRadiusScale");
+        p.set("resolution", Properties::Type::Integer, int64_t(64), kEmitterTestLoc);
+        for (const auto &[name, value] : floats) setFloat(p, name, value);
+        return configured(makeEmitter(p));
+    };
+    const double sky = make("sky", {})->power().g, sun = make("sun", {})->power().g;
+    EXPECT_NEAR(make("sunsky", {})->power().g, sky + sun, 1e-9 * (sky + sun));
+    const double scaled = make("sunsky", {{"skyScale", 0.5}, {"sunScale", 2.0}})->power().g;
+    EXPECT_NEAR(scaled, 0.5 * sky + 2.0 * sun, 1e-9 * scaled);
+    // The map holds floats: a scale other than a power of two rounds differently.
+    EXPECT_NEAR(make("sunsky", {{"scale", 3.0}})->power().g, 3.0 * (sky + sun), 1e-6 * sky);
+    EXPECT_NEAR(make("sun", {{"scale", 3.0}})->power().g, 3.0 * sun, 1e-9 * sun);
+
+    const auto stretched = make("sun", {{"stretch", 1.5}});
+    DirectSample ds(Vec3(0.0), Vec3(0.0));
+    stretched->sampleDirect(ds, {0.0, 0.0});  // the disk's centre
+    const Vec3 local = normalize(kToWorld.inverse().vector(ds.d));
+    sunsky::DateTimeLocation when;
+    when.hour = 11.5;
+    EXPECT_NEAR(sunsky::fromSphere(local).theta, 1.5 * sunsky::solarPosition(when).theta, 1e-9);
+    // Its radiance is that of the unstretched sun.
+    EXPECT_NEAR(stretched->power().g, sun, 1e-9 * sun);
 }
 
 // ---- rendering ----
