@@ -529,6 +529,9 @@ TEST(SunSkyParameters, OutOfRange) {
     p.set("month", Properties::Type::Integer, int64_t(13), kEmitterTestLoc);
     expectBadParameter(p, "month");
     p = props(ObjectKind::Emitter, "sky");
+    p.set("year", Properties::Type::Integer, int64_t(1) << 40, kEmitterTestLoc);
+    expectBadParameter(p, "year");
+    p = props(ObjectKind::Emitter, "sky");
     p.set("resolution", Properties::Type::Integer, int64_t(1), kEmitterTestLoc);
     expectBadParameter(p, "resolution");
     // Midnight in Tokyo: the sky model has no data for a sun below the horizon.

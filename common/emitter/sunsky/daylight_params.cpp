@@ -39,7 +39,11 @@ SphericalCoordinates readSunPosition(const Properties &props, const Transform &t
         return fromSphere(normalize(d));
     }
     DateTimeLocation when;
-    when.year = static_cast<int>(props.getInt("year", when.year));
+    // The Julian-day formula of solar_position.cpp holds from 4713 BC on; the bound also keeps its integer
+    // arithmetic far from overflow.
+    const int64_t year = props.getInt("year", when.year);
+    if (year < -4700 || year > 100000) props.fail("year", "must be in -4700..100000");
+    when.year = static_cast<int>(year);
     when.month = static_cast<int>(props.getInt("month", when.month));
     when.day = static_cast<int>(props.getInt("day", when.day));
     if (when.month < 1 || when.month > 12) props.fail("month", "must be in 1..12");
