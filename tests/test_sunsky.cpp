@@ -93,6 +93,19 @@ TEST(HosekWilkie, CompiledTablesAreTheTextTables) {
     ASSERT_EQ(rgb.radiances.size(), std::size(sunsky::kHosekRGBRadiance));
     for (size_t i = 0; i < rgb.coefficients.size(); ++i) ASSERT_EQ(rgb.coefficients[i], sunsky::kHosekRGBCoeffs[i]);
     for (size_t i = 0; i < rgb.radiances.size(); ++i) ASSERT_EQ(rgb.radiances[i], sunsky::kHosekRGBRadiance[i]);
+    const auto expectTable = [](const std::string &file, const double *wavelengths, const double *values, size_t n) {
+        const auto rows = readTable(file);
+        ASSERT_EQ(rows.size(), n) << file;
+        for (size_t i = 0; i < n; ++i) {
+            EXPECT_EQ(rows[i][0], wavelengths[i]) << file;
+            EXPECT_EQ(rows[i][1], values[i]) << file;
+        }
+    };
+    expectTable("sun_k_o.txt", sunsky::kSunKOWavelengths, sunsky::kSunKOValues, std::size(sunsky::kSunKOValues));
+    expectTable("sun_k_g.txt", sunsky::kSunKGWavelengths, sunsky::kSunKGValues, std::size(sunsky::kSunKGValues));
+    expectTable("sun_k_wa.txt", sunsky::kSunKWaWavelengths, sunsky::kSunKWaValues, std::size(sunsky::kSunKWaValues));
+    expectTable("sun_solar_radiance.txt", sunsky::kSunSolarWavelengths, sunsky::kSunSolarValues,
+                std::size(sunsky::kSunSolarValues));
 }
 
 TEST(HosekWilkie, CheckValuesOfTheReferenceCode) {
