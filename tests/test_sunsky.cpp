@@ -241,7 +241,7 @@ TEST(SkyEmitter, MapPixelsThroughToWorld) {
 // ---- sun position ----
 
 // Reda & Andreas, "Solar Position Algorithm for Solar Radiation Applications", NREL/TP-560-34302 (2004/2008),
-// table A4.1: 17 October 2003, 12:30:30 local time (UTC-7), 39.742476 N, 105.1786 W, 1830.14 m, 820 mbar,
+// its worked example: 17 October 2003, 12:30:30 local time (UTC-7), 39.742476 N, 105.1786 W, 1830.14 m, 820 mbar,
 // 11 C: topocentric zenith 50.11162 degrees (refraction included), azimuth 194.34024 degrees (from north,
 // eastward). Mitsuba's PSA ignores refraction and elevation; its stated accuracy is 0.5' = 0.0083 degrees.
 TEST(SolarPosition, RedaAndreasTestCase) {
@@ -257,8 +257,8 @@ TEST(SolarPosition, RedaAndreasTestCase) {
     when.longitude = -105.1786;
     const SphericalCoordinates sun = sunsky::solarPosition(when);
     const double zenith = radToDeg(sun.theta), azimuth = radToDeg(sun.phi);
-    // SPA's refraction correction (Reda & Andreas eq. 42) at the test's pressure and temperature, so that the
-    // geometric zenith of PSA can be compared with SPA's apparent one.
+    // SPA's atmospheric refraction correction (Reda & Andreas, eq. 42) at the test's pressure and temperature, so that
+    // the geometric zenith of PSA can be compared with SPA's apparent one.
     const double e0 = 90.0 - zenith;
     const double refraction =
         (820.0 / 1010.0) * (283.0 / (273.0 + 11.0)) * 1.02 / (60.0 * std::tan(degToRad(e0 + 10.3 / (e0 + 5.11))));

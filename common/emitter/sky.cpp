@@ -1,6 +1,6 @@
 // Mitsuba 0.6's `sky` emitter: the Hosek-Wilkie clear sky for a sun position, turbidity and ground albedo,
 // rasterized into a `resolution` x `resolution`/2 latitude-longitude map in the local frame of
-// sunsky/horizon_frame.h and emitted as an environment map through toWorld (data/sunsky/README.md §4, §7).
+// sunsky/horizon_frame.h and emitted as an environment map through toWorld (data/sunsky/MITSUBA_USAGE.md §4, §7).
 #include "emitter/endpoint.h"
 #include "emitter/sunsky/daylight_emitter.h"
 #include "emitter/sunsky/daylight_params.h"

@@ -1,5 +1,5 @@
 // The parameters Mitsuba 0.6's `sun`, `sky` and `sunsky` share, with its names and defaults
-// (data/sunsky/README.md §8), and the sun they describe.
+// (data/sunsky/MITSUBA_USAGE.md §8), and the sun they describe.
 #pragma once
 #include <memory>
 #include <optional>

@@ -2,7 +2,7 @@
 // zenith, east is +X, north is -Z and south +Z. A direction is given by its zenith angle theta and its
 // azimuth phi, measured from north towards east (the convention of the solar position algorithm), so
 // that an azimuth of 90 degrees is east. toWorld maps this frame to the scene (Z-up scenes rotate it by
-// 90 degrees about X). See data/sunsky/README.md §2.
+// 90 degrees about X). See data/sunsky/MITSUBA_USAGE.md §2.
 #pragma once
 #include <cmath>
 

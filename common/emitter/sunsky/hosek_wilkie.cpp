@@ -13,7 +13,7 @@ constexpr int kCoefficients = 9, kControlPoints = 6, kTurbidities = 10;
 
 // The quintic Bezier curve of one (albedo, turbidity) block at spline parameter s: the model tabulates
 // each quantity at 6 control points in s = (elevation / (pi/2))^(1/3), which spends more of the spline
-// on low suns, where the sky changes fastest (Hosek & Wilkie 2012, §5).
+// on low suns, where the sky changes fastest (Hosek & Wilkie 2012, the fitting of the model).
 double bezier(const double *block, int stride, double s) {
     static constexpr double kBinomial[kControlPoints] = {1, 5, 10, 10, 5, 1};
     double sum = 0;
@@ -50,9 +50,9 @@ HosekChannel::HosekChannel(const HosekDataset &data, int channel, double turbidi
                                   turbidity, albedo, s);
 }
 
-// The extended Perez formula (Hosek & Wilkie 2012, §4): the Perez et al. 1993 gradation and indicatrix
-// terms, plus a Henyey-Greenstein-like lobe G chi(H, gamma) for aerosol (Mie) scattering around the sun and
-// I sqrt(cos theta) for the zenith brightening; the product scales the zenith radiance L_M.
+// The extended Perez formula (Hosek & Wilkie 2012, the model's radiance distribution): the Perez et al. 1993 gradation
+// and indicatrix terms, plus a Henyey-Greenstein-like lobe G chi(H, gamma) for aerosol (Mie) scattering around the sun
+// and I sqrt(cos theta) for the zenith brightening; the product scales the zenith radiance L_M.
 double HosekChannel::radiance(double theta, double gamma) const {
     const auto &[A, B, C, D, E, F, G, I, H] = coefficients_;  // the tables' order: I before H
     const double cosGamma = std::cos(gamma), cosTheta = std::cos(theta);

@@ -1,5 +1,5 @@
 // The radiance of Mitsuba 0.6's `sky` emitter for a direction of the local frame (horizon_frame.h), and
-// its rasterization into a latitude-longitude map (data/sunsky/README.md §4 and §7).
+// its rasterization into a latitude-longitude map (data/sunsky/MITSUBA_USAGE.md §4 and §7).
 #pragma once
 #include <array>
 

@@ -4,7 +4,7 @@
 
 namespace pf::sunsky {
 
-// Blanco-Muriel et al. 2001, §3 (the PSA algorithm), step by step. Angles in radians, times in days from
+// Blanco-Muriel et al. 2001, the PSA algorithm step by step. Angles in radians, times in days from
 // the J2000.0 epoch (JD 2451545.0).
 SphericalCoordinates solarPosition(const DateTimeLocation &when) {
     // Universal time in decimal hours.

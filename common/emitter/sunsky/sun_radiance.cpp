@@ -36,7 +36,7 @@ const Curve kSolar{kSunSolarWavelengths, kSunSolarValues, static_cast<int>(std::
 
 SampledSpectrum sunSpectrum(double theta, double turbidity) {
     // Angstrom's turbidity coefficient for the given (Linke-like) turbidity, with wavelength exponent 1.3
-    // (Preetham et al. 1999, A.2).
+    // (Preetham et al. 1999, appendix).
     const double beta = 0.04608365822050 * turbidity - 0.04586025928522;
     constexpr double alpha = 1.3;
     // Relative optical air mass (Kasten 1966), finite up to 93.885 degrees.

@@ -1,8 +1,8 @@
 // The sun's radiance seen through the atmosphere, as Mitsuba 0.6 computes it: the extraterrestrial solar
 // spectrum attenuated by Rayleigh scattering, aerosols (from the turbidity), ozone, mixed gases and water
 // vapour along the relative air mass of the sun's zenith angle (Preetham, Shirley and Smits, "A Practical
-// Analytic Model for Daylight", SIGGRAPH 1999, appendix A.2, with the transmittances of Iqbal, "An
-// Introduction to Solar Radiation", 1983, ch. 5), then converted to linear sRGB.
+// Analytic Model for Daylight", SIGGRAPH 1999, appendix on the sun's spectral radiance, with the
+// transmittances of Iqbal, "An Introduction to Solar Radiation", 1983, pp. 115-132), then converted to linear sRGB.
 #pragma once
 #include "core/spectrum.h"
 #include "scene/spectrum_convert.h"
