@@ -7,6 +7,7 @@
 // Short versions; test_long_manifold.cpp has larger images and more runs.
 #include <gtest/gtest.h>
 
+#include "integrators/lambda_tuning.h"
 #include "support/chain_util.h"
 #include "test_mlt_common.h"
 
@@ -79,6 +80,42 @@ INSTANTIATE_TEST_SUITE_P(Scenes, MEPTTimeBudget,
                                            Case{"ring-caustic", 8, 16, 3, 4}),
                          [](const auto &info) { return gtestName(info.param.scene); });
 
+// lambda = "auto" (integrators/lambda_tuning.h): the pilot's λ depends only on the job seed, lies where the
+// manifold perturbation's acceptance is near the target, reaches the chain tasks, and its renders agree with
+// BDPT like a hand-set λ's.
+TEST(AutoLambda, DeterministicNearTheTargetAndUnbiased) {
+    for (const std::string name : {"veach-bidir", "ring-caustic"}) {
+        auto scene = loadMLTTestScene(name, 16, 8);
+        const int maxDepth = name == "ring-caustic" ? 3 : 0;
+        const auto params = withMaxDepth(
+            {{"directSamples", "-1"}, {"lambda", "auto"}, {"numChains", "4.0"}, {"chainLength", "100"}}, maxDepth);
+        const auto integrator = makeTestIntegrator(*scene, "mept", params);
+        const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
+        const SeedingTask pilot = chains.seedingTasks(*scene).at(0);
+        const double lambda = chains.runSeeding(*scene, 8, 11, pilot).lambda;
+        EXPECT_EQ(chains.runSeeding(*scene, 8, 11, pilot).lambda, lambda) << "the same seed, another λ";
+        EXPECT_NE(chains.runSeeding(*scene, 8, 12, pilot).lambda, lambda) << "λ ignores the seed";
+        ASSERT_GT(lambda, 1);
+        ASSERT_LT(lambda, 1e5);
+        const Normalizer normalizer = seedChains(*scene, chains, 11);
+        EXPECT_EQ(normalizer.lambda(), lambda);
+        const ChainTask task = chains.chainTask(*scene, normalizer, 11, 8, 0);
+        EXPECT_EQ(task.lambda, lambda);
+        // A render's chains (chainStatistics seeds with 3) accept near the target.
+        auto [counts, counters] = chainStatistics(*scene, *integrator, 8);
+        const double acceptance = static_cast<double>(counts[0].accepted) / static_cast<double>(counts[0].proposed);
+        std::printf("%s mept lambda=auto: lambda %.1f, acceptance %.1f%% (target %.0f%%)\n", name.c_str(), lambda,
+                    100 * acceptance, 100 * kLambdaTargetAcceptance);
+        EXPECT_NEAR(acceptance, kLambdaTargetAcceptance, 0.12);
+        EXPECT_EQ(counter(counters, "lambda").value, chains.runSeeding(*scene, 8, 3, pilot).lambda);  // its seed
+        ConvergenceSetup s;
+        s.budget = 8;
+        s.maxDepth = maxDepth;
+        expectConvergence(name, "erpt", singleMutationWith(MutationType::Manifold, params), s,
+                          name + " mept lambda=auto");
+    }
+}
+
 class MEMLTConvergence : public ::testing::TestWithParam<Case> {};
 
 // MEMLT: long chains with the bidirectional mutation and the manifold perturbation, set up as test_mlt's
@@ -126,10 +163,17 @@ TEST(ManifoldExploration, IntegratorsAndParameters) {
     EXPECT_EQ(names("mlt", {{"manifoldPerturbation", "true"}, {"lensSubpathMutation", "false"}}),
               (std::vector<std::string>{"bidirectional", "lens", "caustic", "multiChain", "manifold", "none"}));
     EXPECT_NO_THROW(makeTestIntegrator(*scene, "mept", {{"lambda", "90.0"}, {"probFactor", "90.0"}}));
+    EXPECT_NO_THROW(makeTestIntegrator(*scene, "mept", {{"lambda", "auto"}}));
     for (const std::string type : {"mept", "memlt"}) {
         try {
             makeTestIntegrator(*scene, type, {{"lambda", "0.0"}});
             ADD_FAILURE() << type << " accepted lambda = 0";
+        } catch (const SceneError &e) {
+            EXPECT_NE(std::string(e.what()).find("lambda"), std::string::npos) << e.what();
+        }
+        try {
+            makeTestIntegrator(*scene, type, {{"lambda", type == "mept" ? "automatic" : "auto"}});
+            ADD_FAILURE() << type << " accepted a lambda it cannot tune";
         } catch (const SceneError &e) {
             EXPECT_NE(std::string(e.what()).find("lambda"), std::string::npos) << e.what();
         }

@@ -104,6 +104,14 @@ inline std::vector<std::pair<std::string, std::string>> singleMutation(MutationT
     return params;
 }
 
+// The same on top of `params` (other parameters of the chains).
+inline std::vector<std::pair<std::string, std::string>> singleMutationWith(
+    MutationType type, const std::vector<std::pair<std::string, std::string>> &params) {
+    auto all = singleMutation(type);
+    all.insert(all.end(), params.begin(), params.end());
+    return all;
+}
+
 // The per-type counts and the further chain counters (the manifold walks) of one render's chain tasks, with
 // `spp` the render's budget (seeds per pixel for erpt, mutations per pixel for mlt), seeded with 3.
 struct ChainStatistics {
@@ -239,8 +247,7 @@ inline void expectConvergence(const std::string &name, const std::string &type,
 // 2% of its proposals.
 inline void expectSingleMutationConvergence(const std::string &name, MutationType type, const ConvergenceSetup &s,
                                             const std::vector<std::pair<std::string, std::string>> &params = {}) {
-    auto all = singleMutation(type);
-    all.insert(all.end(), params.begin(), params.end());
+    const auto all = singleMutationWith(type, params);
     auto scene = loadMLTTestScene(name, s.res, s.budget);
     const auto integrator = makeTestIntegrator(*scene, "erpt", withMaxDepth(all, s.maxDepth));
     for (const MutationCount &count : mutationCounts(*scene, *integrator))

@@ -52,6 +52,8 @@ inline std::unique_ptr<Integrator> makeTestIntegrator(const Scene &scene, const 
         props.remove(name);
         if (value == "true" || value == "false")
             props.set(name, Properties::Type::Boolean, value == "true", {});
+        else if (value.find_first_not_of("0123456789+-.e") != std::string::npos)
+            props.set(name, Properties::Type::String, value, {});
         else if (value.find_first_of(".e") != std::string::npos)
             props.set(name, Properties::Type::Float, std::stod(value), {});
         else

@@ -2,6 +2,8 @@
 // travelling along `direction`, or along local +z of toWorld. For light tracing the beam enters the
 // scene through the disk of the bounding sphere perpendicular to it (pbrt-v3 §12.4, Mitsuba's
 // directional emitter): positions are uniform on that disk, and the direction is a delta.
+#include "emitter/directional.h"
+
 #include "core/frame.h"
 #include "core/warp.h"
 #include "emitter/endpoint.h"
@@ -26,6 +28,11 @@ public:
         } else {
             direction_ = normalize(rigidTransform(props, "toWorld").vector(Vec3(0, 0, 1)));
         }
+    }
+    DirectionalEmitter(const Vec3 &direction, const Spectrum &irradiance, double samplingWeight)
+        : irradiance_(irradiance), direction_(normalize(direction)) {
+        flags_ = EmitterFlags::DeltaDirection | EmitterFlags::Infinite;
+        samplingWeight_ = samplingWeight;
     }
 
     // The light arrives at ref from -direction; its point is where that line crosses the entry disk.
@@ -84,6 +91,11 @@ private:
 
 std::shared_ptr<Object> createDirectionalEmitter(const Properties &props, const LoadContext &) {
     return std::make_shared<DirectionalEmitter>(props);
+}
+
+std::shared_ptr<Emitter> makeDirectionalEmitter(const Vec3 &direction, const Spectrum &irradiance,
+                                                double samplingWeight) {
+    return std::make_shared<DirectionalEmitter>(direction, irradiance, samplingWeight);
 }
 
 }  // namespace pf

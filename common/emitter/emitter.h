@@ -10,6 +10,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "core/spectrum.h"
 #include "scene/intersection.h"
@@ -27,7 +28,7 @@ enum : uint32_t {
     DeltaPosition = 1u << 0,   // point, spot
     DeltaDirection = 1u << 1,  // directional
     OnSurface = 1u << 2,       // area emitters attached to shapes
-    Infinite = 1u << 3,        // environment emitters (constant, envmap, directional, sunsky)
+    Infinite = 1u << 3,        // emitters at infinity (constant, envmap, directional, sky, sun, sunsky)
 };
 }
 
@@ -74,6 +75,10 @@ public:
     double samplingWeight() const { return samplingWeight_; }
     // Total emitted power (used for display and statistics).
     virtual Spectrum power() const = 0;
+
+    // Emitters that come into the scene with this one. Mitsuba's compound emitters make several: `sunsky`
+    // with sunRadiusScale = 0 is a sky beside a directional sun. The scene adds them after this one.
+    virtual std::vector<std::shared_ptr<Emitter>> companions() const { return {}; }
 
 protected:
     // Reads the parameters every emitter accepts (Mitsuba's samplingWeight).

@@ -1,5 +1,4 @@
-// The emitter plugins of Mitsuba 0.6 that pathfarm supports. Mitsuba's sun, sky and sunsky are not among
-// them: they need the Hosek-Wilkie sky model and the sun's spectral tables, which pathfarm does not ship.
+// The emitter plugins of Mitsuba 0.6 that pathfarm supports: all of them.
 #include "scene/plugins.h"
 
 namespace pf {
@@ -10,12 +9,17 @@ std::shared_ptr<Object> createSpotEmitter(const Properties &props, const LoadCon
 std::shared_ptr<Object> createDirectionalEmitter(const Properties &props, const LoadContext &ctx);
 std::shared_ptr<Object> createConstantEmitter(const Properties &props, const LoadContext &ctx);
 std::shared_ptr<Object> createEnvMapEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createSkyEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createSunEmitter(const Properties &props, const LoadContext &ctx);
+std::shared_ptr<Object> createSunSkyEmitter(const Properties &props, const LoadContext &ctx);
 
 PluginTable emitterPlugins() {
     return {
         {"area", createAreaEmitter},         {"point", createPointEmitter},
         {"spot", createSpotEmitter},         {"directional", createDirectionalEmitter},
         {"constant", createConstantEmitter}, {"envmap", createEnvMapEmitter},
+        {"sky", createSkyEmitter},           {"sun", createSunEmitter},
+        {"sunsky", createSunSkyEmitter},
     };
 }
 

@@ -71,7 +71,11 @@ void Scene::addShape(std::shared_ptr<Shape> shape) {
     shapes_.push_back(std::move(shape));
 }
 
-void Scene::addEmitter(std::shared_ptr<Emitter> emitter) { emitters_.push_back(std::move(emitter)); }
+void Scene::addEmitter(std::shared_ptr<Emitter> emitter) {
+    const auto companions = emitter->companions();
+    emitters_.push_back(std::move(emitter));
+    for (auto &c : companions) addEmitter(c);
+}
 
 void Scene::finalize() {
     if (!sensor_) throw SceneError(location(), "the scene has no sensor");
@@ -101,7 +105,9 @@ void Scene::finalize() {
     environment_ = nullptr;
     std::vector<double> weights;
     for (const auto &e : emitters_) {
-        if (e->isEnvironment()) {
+        // Escaping rays see one environment; delta lights at infinity (directional) cannot be hit, so they
+        // may sit beside it, as in Mitsuba (a sky with a directional sun).
+        if (e->isEnvironment() && !e->isDelta()) {
             if (environment_) throw SceneError(e->location(), "only one environment emitter is supported");
             environment_ = e.get();
         }
