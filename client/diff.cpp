@@ -32,6 +32,19 @@ DiffCommand::DiffCommand(CLI::App &app) : a_(std::make_unique<Args>()) {
 
 DiffCommand::~DiffCommand() = default;
 
+namespace {
+
+// The image's mean luminance: a quick check of a whole image's brightness against the reference's (an
+// unbiased render's ratio converges to 1; a missing component or a wrong normalization shows at once).
+double meanLuminance(const Bitmap &b) {
+    double sum = 0;
+    for (int y = 0; y < b.height; ++y)
+        for (int x = 0; x < b.width; ++x) sum += b.get(x, y).luminance();
+    return b.width > 0 && b.height > 0 ? sum / (static_cast<double>(b.width) * b.height) : 0.0;
+}
+
+}  // namespace
+
 int DiffCommand::run() {
     const Args &a = *a_;
     if (!*a.cmd) return -1;
@@ -45,12 +58,15 @@ int DiffCommand::run() {
     // The render time an EXR of `pathfarm render` or of the farm records, for the efficiency.
     const auto seconds = image.metadata.find("pathfarm.renderSeconds");
     const double renderSeconds = seconds != image.metadata.end() ? std::atof(seconds->second.c_str()) : 0.0;
+    const double mean = meanLuminance(image), referenceMean = meanLuminance(reference);
     if (a.json) {
         nlohmann::json j = metricsJson(m);
         j["image"] = a.image;
         j["reference"] = a.reference;
         j["width"] = image.width;
         j["height"] = image.height;
+        j["meanLuminance"] = mean;
+        j["referenceMeanLuminance"] = referenceMean;
         for (const Metric k : allMetrics()) j["definitions"][metricName(k)] = metricDefinition(k, m.options.epsilon);
         if (renderSeconds > 0) {
             j["renderSeconds"] = renderSeconds;
@@ -69,6 +85,8 @@ int DiffCommand::run() {
     for (const Metric k : allMetrics())
         std::printf("  %-10s %-14.6g %s\n", metricName(k).c_str(), m.get(k),
                     metricDefinition(k, m.options.epsilon).c_str());
+    std::printf("  %-10s %-14.6g mean luminance %.6g against the reference's %.6g\n", "mean ratio",
+                referenceMean > 0 ? mean / referenceMean : 0.0, mean, referenceMean);
     if (renderSeconds > 0)
         std::printf("  %-10s %-14.6g 1 / (relmse x %g s of rendering)\n", "efficiency",
                     efficiency(m.relMse, renderSeconds), renderSeconds);

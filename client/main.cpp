@@ -26,6 +26,7 @@ struct RenderArgs {
     std::string scene, output, integrator;
     int64_t spp = 0;
     double time = 0;
+    int64_t passes = 0;
     uint64_t seed = 0;
     int threads = 0;
     std::vector<std::string> defines, params;
@@ -46,6 +47,7 @@ int runRender(const RenderArgs &a) {
     pf::RenderOptions opt;
     opt.spp = a.spp;
     opt.timeLimit = a.time;
+    opt.passes = a.passes;
     opt.seed = a.seed;
     opt.threads = a.threads > 0 ? a.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     opt.progress = !a.quiet;
@@ -99,6 +101,11 @@ int main(int argc, char **argv) {
     render->add_option("--spp", r.spp, "Samples per pixel (default: the scene's sampleCount)")
         ->check(CLI::PositiveNumber);
     render->add_option("--time", r.time, "Wall-time budget in seconds, spent in whole passes")
+        ->check(CLI::PositiveNumber);
+    render
+        ->add_option("--passes", r.passes,
+                     "Markov-chain integrators: exactly N passes of a --time render's plan (the same bits as a "
+                     "--time render or farm job that ran N passes)")
         ->check(CLI::PositiveNumber);
     render->add_option("--seed", r.seed, "Seed of every random stream");
     render->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::PositiveNumber);

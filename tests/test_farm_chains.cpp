@@ -171,6 +171,37 @@ TEST_F(FarmChains, TimeBudgetIssuesWholeChainTasks) {
         out));
 }
 
+// A burst job under a time budget runs whole passes (render/burst.h): the farm's image has the bits of
+// `pathfarm render --passes P` with the P passes the job ran, also when a worker is killed (SIGKILL) in the
+// middle of a pass; every task is merged once.
+TEST_F(FarmChains, TimedBurstJobEqualsItsPassesEmbeddedAfterAWorkerDies) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 64, 8);
+    farm->startMaster(kFastLeases);
+    Process &victim = farm->startWorker(1);
+    farm->startWorker(1);
+    const std::string args =
+        "--integrator erpt --seed 9 -P maxDepth=4 -P directSamples=2 -P chainLength=40 "
+        "-P numChains=8.0 -P passMutations=8192";
+    const auto [code, output] = farm->cli("submit " + scene + " " + args + " --time 4");
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    ASSERT_TRUE(waitUntil([&] { return victim.log().find("rendering chain task") != std::string::npos; }, 60s))
+        << victim.log() << farm->master().log();
+    victim.signal(SIGKILL);
+    victim.wait(10s);
+    const v1::Job job = farm->waitForJob(id, 120s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm->master().log();
+    const uint64_t passes = job.chain().passes();
+    ASSERT_GT(passes, 1u);
+    EXPECT_EQ(job.chain().passes() * job.chain().tasks_per_pass() + 1 + job.chain().direct_samples_per_pixel(),
+              static_cast<uint64_t>(job.tasks().total()));
+    const std::string out = farm->dir() + "/timed.exr";
+    const auto [fcode, fetched] = farm->cli("fetch " + std::to_string(id) + " -o " + out);
+    ASSERT_EQ(fcode, 0) << fetched;
+    EXPECT_TRUE(sameBits(farm->embeddedRender(scene, args + " --passes " + std::to_string(passes), "passes"), out));
+    expectMergedOnce(id, job.tasks().total());
+}
+
 TEST_F(FarmChains, BadChainBudgetsAreRefusedAtSubmission) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 16, 8);
     farm->startMaster();

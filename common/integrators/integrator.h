@@ -23,6 +23,9 @@ class Scene;
 struct RenderOptions {
     int64_t spp = 0;       // 0 = the scene's sampleCount
     double timeLimit = 0;  // seconds; > 0 overrides spp
+    // Markov-chain integrators: > 0 renders exactly this many passes of a time budget's plan, the
+    // deterministic twin of a `timeLimit` render (or farm job) that ran that many passes; overrides both.
+    int64_t passes = 0;
     uint64_t seed = 0;
     int threads = 0;        // 0 = all cores
     bool progress = false;  // draw a progress bar on stderr

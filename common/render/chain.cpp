@@ -95,7 +95,8 @@ ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, 
 
 uint64_t chainTaskMutations(const Scene &scene) { return std::max(kMinTaskMutations, cropPixels(scene)); }
 
-SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed, const SeedingTask &task) const {
+SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed,
+                                          const SeedingTask &task) const {
     return runSeedingTask(scene, seeding(scene, spp), seed, task);
 }
 
@@ -136,8 +137,8 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
         opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     // Under a time budget the clock decides whether another wave of whole chains starts, never when a chain
     // stops (ALGORITHMS.md §2.5).
-    const bool timed = opt.timeLimit > 0;
-    const int64_t spp = timed ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
+    const bool timed = opt.timeLimit > 0 && opt.passes <= 0;
+    const int64_t spp = timed || opt.passes > 0 ? 0 : (opt.spp > 0 ? opt.spp : scene.sensor().sampleCount());
     ChainJob job(scene, *this, opt.seed, spp);
 
     // The job's tasks in its merge order (render/chain_job.h): seeding first.
@@ -153,23 +154,32 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
 
     // Then whole passes, each with the direct tasks before it (render/chain_job.h), in units of at least one
     // chain task per core. Under a time budget the clock decides whether another unit starts, from the
-    // duration of the last one; a burst render is unbiased only over whole passes (render/burst.h).
+    // expected duration of that unit; a burst render is unbiased only over whole passes (render/burst.h).
     const uint64_t count = job.taskCount();
     const auto passEnd = [&](uint64_t t) {
         for (++t; t < count && !job.startsPass(t);) ++t;
         return t;
     };
-    double lastUnit = 0;
-    for (uint64_t next = job.firstChainTask(); next < count;) {
-        if (timed && next > job.firstChainTask() && secondsSince(start) + lastUnit > opt.timeLimit) break;
-        const auto unitStart = Clock::now();
+    // The clock's estimate of a unit: the direct and the chain tasks' mean wall times so far, each times
+    // their count in the unit (units differ: only some carry direct tasks, which at 1024² take seconds).
+    double directSeconds = 0, chainSeconds = 0;
+    uint64_t directDone = 0, chainDone = 0;
+    const uint64_t passLimit = opt.passes > 0 ? static_cast<uint64_t>(opt.passes) : UINT64_MAX;
+    for (uint64_t next = job.firstChainTask(), passes = 0; next < count && passes < passLimit;) {
         uint64_t end = next, chainTasks = 0;
-        while (end < count && chainTasks < static_cast<uint64_t>(threads)) {
+        while (end < count && chainTasks < static_cast<uint64_t>(threads) && passes < passLimit) {
             const uint64_t e = passEnd(end);
             for (uint64_t t = end; t < e; ++t) chainTasks += job.phaseOf(t) == ChainJob::Phase::Chain;
             end = e;
+            ++passes;
         }
+        const uint64_t directTasks = end - next - chainTasks;
+        const double estimate =
+            (directDone > 0 ? directSeconds / static_cast<double>(directDone) * static_cast<double>(directTasks) : 0) +
+            (chainDone > 0 ? chainSeconds / static_cast<double>(chainDone) * static_cast<double>(chainTasks) : 0);
+        if (timed && next > job.firstChainTask() && secondsSince(start) + estimate > opt.timeLimit) break;
         std::vector<uint64_t> chainIndices;
+        const auto directStart = Clock::now();
         for (uint64_t t = next; t < end; ++t) {
             if (job.phaseOf(t) == ChainJob::Phase::Chain) {
                 chainIndices.push_back(t);
@@ -180,20 +190,25 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
             stats.rays += r.rays;
             job.mergeDirect(r.block, direct.sampleCount);
         }
+        directSeconds += secondsSince(directStart);
+        directDone += directTasks;
+        const auto chainStart = Clock::now();
         runOrdered(
             chainIndices.size(), threads,
             [&](size_t i) { return runChainTask(scene, *this, opt.seed, job.chainTask(chainIndices[i])); },
             [&](const ChainResult &r) { job.mergeChain(r); });
+        chainSeconds += secondsSince(chainStart);
+        chainDone += chainTasks;
         next = end;
-        lastUnit = secondsSince(unitStart);
         char label[96];
         std::snprintf(label, sizeof label, "%llu passes, %lld mutations/px, %lld direct spp, %.1f s",
                       static_cast<unsigned long long>(job.passesMerged()),
                       static_cast<long long>(job.mutationsPerPixel()),
                       static_cast<long long>(job.directSamplesPerPixel()), secondsSince(start));
-        progress.update(timed ? secondsSince(start) / opt.timeLimit
-                              : static_cast<double>(next - job.firstChainTask()) /
-                                    static_cast<double>(count - job.firstChainTask()),
+        progress.update(timed                     ? secondsSince(start) / opt.timeLimit
+                        : passLimit != UINT64_MAX ? static_cast<double>(passes) / static_cast<double>(passLimit)
+                                                  : static_cast<double>(next - job.firstChainTask()) /
+                                                        static_cast<double>(count - job.firstChainTask()),
                         label);
         if (opt.onPass) opt.onPass(job.mutationsPerPixel(), job.develop());
     }
