@@ -2,7 +2,7 @@
 // statistics of Table 1 for MEPT and MEMLT, chain throughput per core, and the error at equal time of MEPT,
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
-//   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L]
+//   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
 //                  [--chain-length M] [--methods bdpt,memlt,erpt,mept] [--table1 0|1] [--references DIR] [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
 //   bench_manifold --sweep-lambda L1,.. [--sweep-length M1,..] [--sweep-seeds N1,..] [same options] [scene ...]
@@ -87,7 +87,10 @@ std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::st
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
-    if (type == "mept" || type == "memlt") props.set("lambda", pf::Properties::Type::Float, p.lambda, {});
+    // lambda 0: "auto" (the pilot tunes it; mept only, memlt keeps its default).
+    if (type == "mept" && !(p.lambda > 0)) props.set("lambda", pf::Properties::Type::String, std::string("auto"), {});
+    if ((type == "mept" || type == "memlt") && p.lambda > 0)
+        props.set("lambda", pf::Properties::Type::Float, p.lambda, {});
     if (isBurst(type)) {
         props.set("chainLength", pf::Properties::Type::Integer, p.chainLength, {});
         props.set("numChains", pf::Properties::Type::Float, p.numChains, {});
@@ -423,7 +426,7 @@ int main(int argc, char **argv) {
         {"--ref-spp", [&](const char *v) { o.refSpp = std::stoi(v); }},
         {"--seed-spp", [&](const char *v) { o.seedSpp = std::stoi(v); }},
         {"--mpp", [&](const char *v) { o.mpp = std::stoi(v); }},
-        {"--lambda", [&](const char *v) { o.lambda = std::stod(v); }},
+        {"--lambda", [&](const char *v) { o.lambda = std::string(v) == "auto" ? 0.0 : std::stod(v); }},
         {"--chain-length", [&](const char *v) { o.chainLength = std::stoll(v); }},
         {"--sweep-lambda", [&](const char *v) { o.sweepLambdas = parseList<double>(v, +toDouble); }},
         {"--sweep-length", [&](const char *v) { o.sweepLengths = parseList<int64_t>(v, +toInt); }},
