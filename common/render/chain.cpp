@@ -23,7 +23,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr uint64_t kChainStream = 0xc4a1ULL;
-constexpr uint64_t kMinTaskMutations = 1u << 14;
+constexpr uint64_t kMinTaskMutations = 1u << 14, kMaxTaskMutations = 1u << 18;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -93,7 +93,9 @@ ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, 
     return result;
 }
 
-uint64_t chainTaskMutations(const Scene &scene) { return std::max(kMinTaskMutations, cropPixels(scene)); }
+uint64_t chainTaskMutations(const Scene &scene) {
+    return std::clamp(cropPixels(scene), kMinTaskMutations, kMaxTaskMutations);
+}
 
 SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed,
                                           const SeedingTask &task) const {
