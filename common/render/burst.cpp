@@ -43,23 +43,12 @@ std::vector<SeedCandidate> burstCandidates(const Scene &scene, const SeedingConf
     PCG32 rng(hashCombine(seed, round), kInterleaveStream);
     const uint64_t offset = m > 1 ? rng.nextUInt(static_cast<uint32_t>(m)) : 0;
     const uint64_t first = task.block * pixels / plan.blocks, last = (task.block + 1) * pixels / plan.blocks;
-    std::vector<SeedCandidate> candidates;
-    IndependentSampler sampler;
+    SeedingResult seeds;
     samples = 0;
     // The first covered pixel at or after `first`: (i + offset) mod m = phase.
-    const uint64_t start = first + (phase + m - (first + offset) % m) % m;
-    for (uint64_t i = start; i < last; i += m) {
-        const uint64_t pixel = filmPixel(film, i);
-        sampler.start(seed, pixel, round);
-        const Vec2 raster = samplePixel(film, pixel, sampler);
-        config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-            const double weight = x.value.luminance();
-            if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
-            candidates.push_back({{pixel, round, x.s, x.t}, weight});
-        });
-        ++samples;
-    }
-    return candidates;
+    for (uint64_t i = first + (phase + m - (first + offset) % m) % m; i < last; i += m, ++samples)
+        seedSample(scene, config, seed, filmPixel(film, i), round, 1.0, true, seeds);
+    return std::move(seeds.candidates);
 }
 
 }  // namespace pf

@@ -17,8 +17,7 @@ constexpr uint64_t kStrataStream = 0x57a7aULL;
 
 uint64_t pilotSeed(uint64_t jobSeed) { return hashCombine(jobSeed, kPilotSeedTag); }
 
-SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples,
-                       bool keep) {
+SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t jobSeed, uint64_t samples, bool keep) {
     const auto start = std::chrono::steady_clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
     const Film &film = scene.sensor().film();
@@ -26,23 +25,12 @@ SeedingResult runPilot(const Scene &scene, const SeedingConfig &config, uint64_t
     const double perSample = static_cast<double>(pixels) / static_cast<double>(samples);
     const uint64_t seed = pilotSeed(jobSeed);
     SeedingResult result;
-    IndependentSampler sampler;
     PCG32 strata(seed, kStrataStream);
     for (uint64_t j = 0; j < samples; ++j) {
         // Stratum j of the pixels, [j, j + 1) * pixels / samples, a uniform position in it.
         const double u = (static_cast<double>(j) + strata.nextDouble()) * perSample;
         const uint64_t pixel = filmPixel(film, std::min(pixels - 1, static_cast<uint64_t>(u)));
-        sampler.start(seed, pixel, j);
-        const Vec2 raster = samplePixel(film, pixel, sampler);
-        config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-            const int depth = x.s + x.t - 1;
-            const double weight = x.value.luminance() * perSample;
-            if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
-            if (keep) result.candidates.push_back({{pixel, j, x.s, x.t}, weight});
-            if (result.depthLuminance.size() <= static_cast<size_t>(depth))
-                result.depthLuminance.resize(static_cast<size_t>(depth) + 1, 0.0);
-            result.depthLuminance[static_cast<size_t>(depth)] += weight;
-        });
+        seedSample(scene, config, seed, pixel, j, perSample, keep, result);
     }
     result.samples = samples;
     result.rays = Scene::threadRayCount() - rays0;

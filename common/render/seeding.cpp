@@ -38,6 +38,21 @@ std::vector<SeedingTask> seedingTasks(const Scene &scene) {
     return tasks;
 }
 
+void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
+                double scale, bool keep, SeedingResult &result) {
+    IndependentSampler sampler(seed, pixel, sampleIndex);
+    const Vec2 raster = samplePixel(scene.sensor().film(), pixel, sampler);
+    config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
+        const double weight = x.value.luminance() * scale;
+        if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
+        if (keep) result.candidates.push_back({{pixel, sampleIndex, x.s, x.t}, weight});
+        // Per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
+        const size_t depth = static_cast<size_t>(x.s + x.t - 1);
+        if (result.depthLuminance.size() <= depth) result.depthLuminance.resize(depth + 1, 0.0);
+        result.depthLuminance[depth] += weight;
+    });
+}
+
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task) {
     if (task.pilotSamples > 0) return runPilot(scene, config, seed, task.pilotSamples);
     const auto start = std::chrono::steady_clock::now();
@@ -45,24 +60,9 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
     const Film &film = scene.sensor().film();
     const double perSample = 1.0 / static_cast<double>(config.samplesPerPixel);
     SeedingResult result;
-    IndependentSampler sampler;
-    for (uint64_t i = task.firstPixel; i < task.firstPixel + task.pixelCount; ++i) {
-        const uint64_t pixel = filmPixel(film, i);
-        for (int64_t k = 0; k < config.samplesPerPixel; ++k) {
-            const uint64_t sampleIndex = static_cast<uint64_t>(k);
-            sampler.start(seed, pixel, sampleIndex);
-            const Vec2 raster = samplePixel(film, pixel, sampler);
-            config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-                const int depth = x.s + x.t - 1;
-                const double weight = x.value.luminance() * perSample;
-                if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
-                result.candidates.push_back({{pixel, sampleIndex, x.s, x.t}, weight});
-                if (result.depthLuminance.size() <= static_cast<size_t>(depth))
-                    result.depthLuminance.resize(static_cast<size_t>(depth) + 1, 0.0);
-                result.depthLuminance[static_cast<size_t>(depth)] += weight;
-            });
-        }
-    }
+    for (uint64_t i = task.firstPixel; i < task.firstPixel + task.pixelCount; ++i)
+        for (int64_t k = 0; k < config.samplesPerPixel; ++k)
+            seedSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, true, result);
     result.samples = task.pixelCount * static_cast<uint64_t>(config.samplesPerPixel);
     result.rays = Scene::threadRayCount() - rays0;
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -57,6 +57,13 @@ std::vector<SeedingTask> seedingTasks(const Scene &scene);
 // The task's pixels, or the pilot when it is one.
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task);
 
+// One BDPT seed sample of film pixel `pixel`, drawn from IndependentSampler(seed, pixel, sampleIndex) as the
+// render loop draws it: every strategy of a path of at least config.minDepth with a positive, finite weight
+// (its luminance times `scale`) is added to result.depthLuminance and, when `keep`, to result.candidates.
+// Seeding, the luminance pilot and burst tasks all take their samples through it.
+void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
+                double scale, bool keep, SeedingResult &result);
+
 // The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.
 uint64_t filmPixel(const Film &film, uint64_t cropIndex);
 // The raster position of a pixel sample, drawn from `sampler` as the render loop draws it (two numbers,
