@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <random>
 
 #include "farm/block_codec.h"
 #include "farm/bundle.h"
+#include "farm/chain_codec.h"
 #include "farm/error.h"
 #include "farm/harness.h"
 #include "farm/hash.h"
@@ -71,6 +73,65 @@ TEST(FarmWire, CorruptOrMismatchedBlocksAreRefused) {
     ImageBlock infinite(0, 0, 37, 23, &gaussian);
     infinite.sumData()[5] = INFINITY;
     EXPECT_THROW(pf::farm::decodeBlock(pf::farm::encodeBlock(infinite), right), FarmError);
+}
+
+// Burst tasks and the luminance pilot on the wire (render/burst.h, render/pilot.h): a task's pass, plan, W
+// and jump size round-trip exactly, and a worker refuses a malformed plan or a bad W or λ with a FarmError
+// (the master refuses a pilot result with a bad λ alike) rather than dividing by zero later.
+TEST(FarmWire, BurstTasksRoundTripAndMalformedOnesAreRefused) {
+    pf::ChainTask task;
+    task.index = 17;
+    task.mutations = 100;
+    task.lambda = 8.5;
+    pf::BurstPlan plan;
+    plan.interleave = 7;
+    plan.blocks = 3;
+    plan.chainsPerPixel = 0.125;
+    task.burst = pf::BurstPass{11, 2, 0.25, plan};
+    const pf::ChainTask back = pf::farm::fromProto(pf::farm::toProto(task));
+    ASSERT_TRUE(back.burst.has_value());
+    EXPECT_EQ(back.index, 17u);
+    EXPECT_EQ(back.lambda, 8.5);
+    EXPECT_EQ(back.burst->pass, 11u);
+    EXPECT_EQ(back.burst->block, 2u);
+    EXPECT_EQ(back.burst->meanLuminance, 0.25);
+    EXPECT_EQ(back.burst->plan.interleave, 7u);
+    EXPECT_EQ(back.burst->plan.blocks, 3u);
+    EXPECT_EQ(back.burst->plan.chainsPerPixel, 0.125);
+
+    const auto refused = [&](const std::function<void(pathfarm::v1::ChainTask &)> &spoil) {
+        pathfarm::v1::ChainTask wire = pf::farm::toProto(task);
+        spoil(wire);
+        EXPECT_THROW(pf::farm::fromProto(wire), FarmError) << wire.DebugString();
+    };
+    refused([](auto &w) { w.mutable_burst()->set_interleave(0); });
+    refused([](auto &w) { w.mutable_burst()->set_blocks(0); });
+    refused([](auto &w) { w.mutable_burst()->set_block(3); });
+    refused([](auto &w) { w.mutable_burst()->set_chains_per_pixel(0); });
+    refused([](auto &w) { w.mutable_burst()->set_chains_per_pixel(std::nan("")); });
+    refused([](auto &w) { w.mutable_burst()->set_mean_luminance(-1); });
+    refused([](auto &w) { w.mutable_burst()->set_mean_luminance(INFINITY); });
+    refused([](auto &w) { w.set_lambda(-2); });
+
+    pf::SeedingResult pilot;
+    pilot.depthLuminance = {0.5, 0.25};
+    pilot.samples = 15000;
+    pilot.lambda = 9.25;
+    const pf::SeedingTask pilotTask{0, 0, 15000};
+    const pf::SeedingTask wireTask = pf::farm::fromProto([&] {
+        pathfarm::v1::SeedingTask t;
+        pf::farm::toProto(pilotTask, t);
+        return t;
+    }());
+    EXPECT_EQ(wireTask.pilotSamples, 15000u);
+    const auto scene = pf::loadScene(writeTestScene(tempDir("wire-pilot"), 8, 1));
+    const pf::Film &film = scene->sensor().film();
+    const pf::SeedingResult decoded =
+        pf::farm::decodeSeedingResult(pf::farm::encodeSeedingResult(pilot), film, wireTask);
+    EXPECT_EQ(decoded.lambda, 9.25);
+    EXPECT_EQ(decoded.depthLuminance, pilot.depthLuminance);
+    pilot.lambda = std::nan("");
+    EXPECT_THROW(pf::farm::decodeSeedingResult(pf::farm::encodeSeedingResult(pilot), film, wireTask), FarmError);
 }
 
 TEST(FarmWire, SceneFilesAreCollectedThroughIncludesAndDefines) {
