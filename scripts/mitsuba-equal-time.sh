@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Renders a scene with Mitsuba 0.6 for about a given wall time, for side-by-side equal-time comparisons with
+# pathfarm (issue 17, README "Tests and benchmarks"). Mitsuba is not a dependency of pathfarm: build it
+# yourself (e.g. with ../shared/tools/build-mitsuba.sh) and pass the path of its `mitsuba` wrapper.
+#
+#   scripts/mitsuba-equal-time.sh MITSUBA SCENE.xml INTEGRATOR SECONDS RES OUT.exr [THREADS]
+#
+# Mitsuba 0.6 has no wall-time budget for its sampling integrators, so the budget becomes a sample count:
+# two short probe renders (1 and 4 samples per pixel; for Mitsuba's mlt/pssmlt/erpt the sampler's
+# sampleCount is mutations per pixel) separate the fixed start-up cost (loading, kd-tree, seeding) from the
+# cost per sample, and the final render gets the count that fills SECONDS. The scene is rendered from a
+# rewritten copy (integrator type, sampleCount, film width and height = RES; the scene's other files are
+# linked), so the file itself is untouched. Prints the count and the measured wall time; compare with
+#   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
+#       --reference REF.exr --image mitsuba=OUT.exr SCENE.xml
+set -euo pipefail
+
+if [ $# -lt 6 ]; then
+    sed -n '2,16p' "$0"
+    exit 2
+fi
+MITSUBA=$1 SCENE=$2 INTEGRATOR=$3 SECONDS_=$4 RES=$5 OUT=$6 THREADS=${7:-$(nproc)}
+[ -x "$MITSUBA" ] || { echo "error: $MITSUBA is not an executable" >&2; exit 2; }
+[ -f "$SCENE" ] || { echo "error: $SCENE: no such scene file" >&2; exit 2; }
+
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+SRC_DIR=$(cd "$(dirname "$SCENE")" && pwd)
+for f in "$SRC_DIR"/*; do
+    [ "$f" = "$SRC_DIR/$(basename "$SCENE")" ] || ln -s "$f" "$WORK/$(basename "$f")"
+done
+
+# The scene with INTEGRATOR, RES x RES and `count` samples per pixel, as $WORK/scene-COUNT.xml.
+rewrite() {
+    python3 - "$SCENE" "$WORK/scene-$1.xml" "$INTEGRATOR" "$RES" "$1" <<'PY'
+import re, sys
+src, dst, integrator, res, count = sys.argv[1:]
+xml = open(src).read()
+xml = re.sub(r'<integrator\s+type="[^"]*"', f'<integrator type="{integrator}"', xml, count=1)
+xml = re.sub(r'(<integer\s+name="sampleCount"\s+value=")[^"]*"', rf'\g<1>{count}"', xml)
+xml = re.sub(r'(<integer\s+name="(?:width|height)"\s+value=")[^"]*"', rf'\g<1>{res}"', xml)
+open(dst, "w").write(xml)
+PY
+}
+
+# Wall seconds of one Mitsuba render of $WORK/scene-COUNT.xml into FILE.
+timed() {
+    local start end
+    start=$(date +%s.%N)
+    "$MITSUBA" -q -p "$THREADS" -o "$2" "$WORK/scene-$1.xml" >"$WORK/log-$1" 2>&1 ||
+        { cat "$WORK/log-$1" >&2; echo "error: mitsuba failed on $SCENE" >&2; exit 1; }
+    end=$(date +%s.%N)
+    python3 -c "print($end - $start)"
+}
+
+rewrite 1
+rewrite 4
+T1=$(timed 1 "$WORK/probe1.exr")
+T4=$(timed 4 "$WORK/probe4.exr")
+COUNT=$(python3 -c "
+t1, t4, budget = $T1, $T4, $SECONDS_
+per = max((t4 - t1) / 3, 1e-6)
+setup = max(t1 - per, 0)
+print(max(1, int((budget - setup) / per)))")
+rewrite "$COUNT"
+T=$(timed "$COUNT" "$OUT")
+echo "mitsuba $INTEGRATOR: $COUNT samples per pixel at ${RES}x${RES} in $T s with $THREADS threads (probes: 1 spp $T1 s, 4 spp $T4 s) -> $OUT"
