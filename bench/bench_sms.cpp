@@ -3,7 +3,8 @@
 // sphere scenes; the solver's success rate and mean Bernoulli trials per solution (the paper's Fig. 6 reports
 // 26-29% and about 6 on its refractive sphere); rays per second of sms against path.
 //
-//     bench_sms [--res N] [--time S] [--ref-spp N] [--threads T] [scene.xml ...]
+//     bench_sms [--res N] [--time S] [--ref-spp N] [--threads T] [scene.xml ...]   (default scenes: from the
+//     repository root, scenes/ring-caustic and scenes/sphere-caustic)
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -48,21 +49,21 @@ int main(int argc, char **argv) {
     }
     if (o.scenes.empty())
         for (const char *name : {"ring-caustic", "sphere-caustic"})
-            o.scenes.push_back(std::string(PATHFARM_SOURCE_DIR) + "/scenes/" + name + "/scene.xml");
+            o.scenes.push_back(std::string("scenes/") + name + "/scene.xml");
 
-    std::printf("equal time %.1f s per render at %dx%d, relMSE (all / without the 0.1%% worst pixels) against "
-                "bdpt at %d spp\n",
-                o.seconds, o.res, o.res, o.refSpp);
+    std::printf(
+        "equal time %.1f s per render at %dx%d, relMSE (all / without the 0.1%% worst pixels) against "
+        "bdpt at %d spp\n",
+        o.seconds, o.res, o.res, o.refSpp);
     for (const std::string &path : o.scenes) {
         auto scene = bench::loadWithSampleCount(path, 1, o.res, "bench_sms");
         pf::RenderStats refStats;
         const auto bdpt = pf::createIntegrator("bdpt", integratorProps(*scene, "bdpt"), true);
         const pf::Bitmap reference = bench::renderWith(*scene, *bdpt, o.refSpp, 0, 9999, o.threads, refStats);
         std::printf("\n%s (reference %.1f s)\n", path.c_str(), refStats.seconds);
-        std::printf("  %-18s %8s %8s %12s %12s %10s %9s %8s %6s\n", "integrator", "spp", "seconds", "relMSE",
-                    "trimmed", "Mrays/s", "success", "trials", "guard");
-        const auto row = [&](const std::string &name, const pf::Integrator &integrator,
-                             const pf::SmsConnection *sms) {
+        std::printf("  %-18s %8s %8s %12s %12s %10s %9s %8s %6s\n", "integrator", "spp", "seconds", "relMSE", "trimmed",
+                    "Mrays/s", "success", "trials", "guard");
+        const auto row = [&](const std::string &name, const pf::Integrator &integrator, const pf::SmsConnection *sms) {
             pf::RenderStats stats;
             const pf::Bitmap image = bench::renderWith(*scene, integrator, 0, o.seconds, 1, o.threads, stats);
             const bench::RelativeError err = bench::relativeError(image, reference);

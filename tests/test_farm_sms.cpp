@@ -18,8 +18,8 @@ TEST_F(FarmSms, ImageTasksMatchTheEmbeddedRender) {
     std::ifstream in(std::string(PATHFARM_SOURCE_DIR) + "/scenes/pool-caustic/scene.xml");
     std::stringstream xml;
     xml << in.rdbuf();
-    const std::string scene =
-        writeFile(farm->dir(), "pool.xml", std::regex_replace(xml.str(), std::regex(R"(value="256")"), R"(value="24")"));
+    const std::string scene = writeFile(farm->dir(), "pool.xml",
+                                        std::regex_replace(xml.str(), std::regex(R"(value="256")"), R"(value="24")"));
     const std::string spec = "--integrator sms --spp 12 --seed 5";
     const std::string ref = farm->embeddedRender(scene, spec, "reference");
     farm->startMaster(kFastLeases);

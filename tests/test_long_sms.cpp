@@ -1,6 +1,7 @@
 // Long statistical checks of `sms` (CTest label "long"): unbiased sms agrees with the path tracer on ring-caustic
 // (its light enlarged x15, same radiance, as in test_bdpt), on cornell-box with the tall box made a mirror and
-// with that box's caustic flagged out of sms, and on the sphere scene at a larger resolution; biased sms loses
+// with that box's caustic flagged out of sms, and on the sphere scene at a larger resolution, also with the
+// mirror sphere flagged out of the casters; biased sms loses
 // energy, less as M grows.
 #include <gtest/gtest.h>
 
@@ -35,18 +36,22 @@ TEST(SmsLong, RingCaustic) { expectSmsAgrees("ring-caustic", {kBigRingLight}, 32
 
 TEST(SmsLong, CornellBoxWithAMirrorBox) {
     expectSmsAgrees("cornell-box", {kMirrorTallBox}, 32, 16, 8, "cornell mirror box");
-    expectSmsAgrees(
-        "cornell-box",
-        {{R"(<ref id="TallBox" />)", R"(<bsdf type="conductor"><string name="material" value="none"/></bsdf>
+    expectSmsAgrees("cornell-box",
+                    {{R"(<ref id="TallBox" />)", R"(<bsdf type="conductor"><string name="material" value="none"/></bsdf>
             <boolean name="causticCaster" value="false"/>)"}},
-        32, 16, 8, "cornell mirror box, not a caster");
+                    32, 16, 8, "cornell mirror box, not a caster");
 }
 
+// The light enlarged x4 (radiance / 16); with and without the mirror sphere among the casters.
 TEST(SmsLong, SphereCaustic) {
-    expectSmsAgrees("sphere-caustic",
-                    {{R"(<scale x="0.15" y="0.15" z="0.15"/>)", R"(<scale x="0.6" y="0.6" z="0.6"/>)"},
-                     {R"(value="3000")", R"(value="190")"}},
-                    32, 128, 32, "sphere-caustic");
+    const std::vector<Edit> bigLight = {
+        {R"(<scale x="0.15" y="0.15" z="0.15"/>)", R"(<scale x="0.6" y="0.6" z="0.6"/>)"},
+        {R"(value="3000")", R"(value="190")"}};
+    expectSmsAgrees("sphere-caustic", bigLight, 32, 128, 32, "sphere-caustic");
+    std::vector<Edit> notCaster = bigLight;
+    notCaster.push_back({R"(<float name="radius" value="0.8"/>)",
+                         R"(<float name="radius" value="0.8"/><boolean name="causticCaster" value="false"/>)"});
+    expectSmsAgrees("sphere-caustic", notCaster, 32, 128, 32, "sphere-caustic, mirror sphere not a caster");
 }
 
 // Biased sms: the image's mean is below unbiased sms's and rises with M (the energy loss of [SMS §5.2]).

@@ -27,7 +27,9 @@ const std::map<std::string, Factory> &factories() {
         {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p, false); }},
         {"pssmlt", [](const Properties &p) { return std::make_unique<PSSMLT>(p); }},
         {"sms",
-         [](const Properties &p) { return std::make_unique<PathTracer>(p, false, std::make_shared<SmsConnection>(p)); }},
+         [](const Properties &p) {
+             return std::make_unique<PathTracer>(p, false, std::make_shared<SmsConnection>(p));
+         }},
         {"volpath", [](const Properties &p) { return std::make_unique<PathTracer>(p, true); }},
     };
     return table;

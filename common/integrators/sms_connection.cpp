@@ -70,7 +70,8 @@ void SmsConnection::begin(const Scene &scene) const {
 
 void SmsConnection::end() const {
     std::fprintf(stderr,
-                 "sms: %" PRIu64 " estimates, %" PRIu64 " solver trials, success rate %.1f%%, mean trials per "
+                 "sms: %" PRIu64 " estimates, %" PRIu64
+                 " solver trials, success rate %.1f%%, mean trials per "
                  "solution %.2f, runaway guard hits %" PRIu64 "\n",
                  stats_.estimates.load(), stats_.solves.load(), 100.0 * stats_.successRate(), stats_.meanTrials(),
                  stats_.guardHits.load());
@@ -83,8 +84,7 @@ bool SmsConnection::receives(const Intersection &its) const {
 bool SmsConnection::casts(const Intersection &its, uint32_t sampledLobe) const {
     if (!isCaster(*its.shape)) return false;
     const Scattering event = specularEvent(*its.shape);
-    return sampledLobe ==
-           (event == Scattering::Refraction ? BSDFFlags::DeltaTransmission : BSDFFlags::DeltaReflection);
+    return sampledLobe == (event == Scattering::Refraction ? BSDFFlags::DeltaTransmission : BSDFFlags::DeltaReflection);
 }
 
 bool SmsConnection::connectsTo(const Emitter &emitter) const {
@@ -119,9 +119,8 @@ Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Int
         if (ps.measure != Measure::Discrete) le *= 1.0 / std::abs(dot(ps.n, d32));
         BSDFSample bs;
         const Scattering event = specularEvent(*x2.shape);
-        const BSDFContext lobe(TransportMode::Radiance, event == Scattering::Refraction
-                                                            ? BSDFFlags::DeltaTransmission
-                                                            : BSDFFlags::DeltaReflection);
+        const BSDFContext lobe(TransportMode::Radiance, event == Scattering::Refraction ? BSDFFlags::DeltaTransmission
+                                                                                        : BSDFFlags::DeltaReflection);
         const Spectrum specular = x2.bsdf()->sample(lobe, x2, x2.wi, bs, 0.5, Vec2(0.5, 0.5));
         if (specular.isBlack() || scene.occluded(scene.spawnRayTo(x2, ps.p))) return {};
         const std::optional<double> g = specularChainGeometry(x1, x2, x3);
@@ -130,8 +129,7 @@ Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Int
 
     Spectrum sum;
     for (const auto &shape : scene.shapes())
-        if (isCaster(*shape))
-            sum += manifoldSum(scene, x1, ps.p, *shape, settings_, sampler, stats_, contribution);
+        if (isCaster(*shape)) sum += manifoldSum(scene, x1, ps.p, *shape, settings_, sampler, stats_, contribution);
     return sum;
 }
 

@@ -48,12 +48,12 @@ struct SmsSettings {
 
 // Counters of a render (updated from all render threads).
 struct SmsStatistics {
-    std::atomic<uint64_t> estimates{0};    // manifoldSum calls
-    std::atomic<uint64_t> solves{0};       // seed-and-solve trials of all kinds
-    std::atomic<uint64_t> successes{0};    // trials that ended on a solution passing the post-check
-    std::atomic<uint64_t> bernoulli{0};    // unbiased: trials spent re-finding solutions (the counts N)
+    std::atomic<uint64_t> estimates{0};      // manifoldSum calls
+    std::atomic<uint64_t> solves{0};         // seed-and-solve trials of all kinds
+    std::atomic<uint64_t> successes{0};      // trials that ended on a solution passing the post-check
+    std::atomic<uint64_t> bernoulli{0};      // unbiased: trials spent re-finding solutions (the counts N)
     std::atomic<uint64_t> solutionsUsed{0};  // unbiased: first solutions that had a nonzero f (with a count N)
-    std::atomic<uint64_t> guardHits{0};    // unbiased: counts stopped by the runaway guard
+    std::atomic<uint64_t> guardHits{0};      // unbiased: counts stopped by the runaway guard
     void reset();
     double successRate() const;
     double meanTrials() const;  // mean N per estimated solution (unbiased)
