@@ -1,6 +1,6 @@
-// Specular manifold sampling against the path tracer and BDPT (issue 15's closing figures): equal-time relMSE
-// against a long BDPT reference for path, bdpt, sms unbiased and sms biased with M = 1, 4, 8, on the ring and
-// sphere scenes; the solver's success rate and mean Bernoulli trials per solution (the paper's Fig. 6 reports
+// Specular manifold sampling against the path tracer, BDPT and MEPT (issue 15's closing figures): equal-time
+// relMSE against a long BDPT reference for path, bdpt, mept, sms unbiased and sms biased with M = 1, 4, 8, on the ring
+// and sphere scenes; the solver's success rate and mean Bernoulli trials per solution (the paper's Fig. 6 reports
 // 26-29% and about 6 on its refractive sphere); rays per second of sms against path.
 //
 //     bench_sms [--res N] [--time S] [--ref-spp N] [--threads T] [scene.xml ...]   (default scenes: from the
@@ -70,15 +70,18 @@ int main(int argc, char **argv) {
             std::printf("  %-18s %8lld %8.2f %12.5g %12.5g %10.2f", name.c_str(),
                         static_cast<long long>(stats.samplesPerPixel), stats.seconds, err.all, err.trimmed,
                         static_cast<double>(stats.rays) / stats.seconds * 1e-6);
-            if (sms)
+            if (sms && !sms->settings().biased)
                 std::printf(" %8.1f%% %8.2f %6llu\n", 100 * sms->statistics().successRate(),
                             sms->statistics().meanTrials(),
                             static_cast<unsigned long long>(sms->statistics().guardHits.load()));
+            else if (sms)
+                std::printf(" %8.1f%%\n", 100 * sms->statistics().successRate());
             else
                 std::printf("\n");
         };
         row("path", *pf::createIntegrator("path", integratorProps(*scene, "path"), true), nullptr);
         row("bdpt", *bdpt, nullptr);
+        row("mept", *pf::createIntegrator("mept", integratorProps(*scene, "mept"), true), nullptr);
         for (int m : {0, 1, 4, 8}) {
             pf::Properties props = integratorProps(*scene, "sms");
             if (m > 0) {

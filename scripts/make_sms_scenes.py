@@ -60,18 +60,20 @@ FLOOR = """	<shape type="rectangle">
 	</shape>
 """
 
-SPHERE_CAUSTIC = """<?xml version="1.0" encoding="utf-8"?>
-<!-- SPHERE-CAUSTIC (CC0, scripts/make_sms_scenes.py): a glass sphere (bk7) and a mirror sphere on a diffuse
-     plane under a small area light. The mirror sphere's caustic is L S D (one-bounce SMS); the glass sphere's is
-     L S S D (two refractions: left to the path tracer by one-bounce sms). -->
-<scene version="0.6.0">
+# The start of both scenes: the path tracer with the depth that sms needs, the camera and the light.
+HEAD = """<scene version="0.6.0">
 	<integrator type="path">
 		<integer name="maxDepth" value="8"/>
 	</integrator>
 
 {sensor}
-{light}
-	<shape type="sphere">
+{light}"""
+
+SPHERE_CAUSTIC = """<?xml version="1.0" encoding="utf-8"?>
+<!-- SPHERE-CAUSTIC (CC0, scripts/make_sms_scenes.py): a glass sphere (bk7) and a mirror sphere on a diffuse
+     plane under a small area light. The mirror sphere's caustic is L S D (one-bounce SMS); the glass sphere's is
+     L S S D (two refractions: left to the path tracer by one-bounce sms). -->
+{head}	<shape type="sphere">
 		<point name="center" x="-1.2" y="1" z="0"/>
 		<float name="radius" value="1"/>
 		<bsdf type="dielectric"/>
@@ -92,14 +94,7 @@ POOL_CAUSTIC = """<?xml version="1.0" encoding="utf-8"?>
 <!-- POOL-CAUSTIC (CC0, scripts/make_sms_scenes.py): a diffuse pool floor one unit under a flat water surface
      (intIOR 1.33), a small area light above the water, the camera above looking down through it. The floor's
      light arrives through one refraction (L S D), and the camera sees it through another (... D S E). -->
-<scene version="0.6.0">
-	<integrator type="path">
-		<integer name="maxDepth" value="8"/>
-	</integrator>
-
-{sensor}
-{light}
-	<shape type="rectangle">
+{head}	<shape type="rectangle">
 		<bsdf type="dielectric">
 			<float name="intIOR" value="1.33"/>
 			<float name="extIOR" value="1"/>
@@ -133,8 +128,8 @@ def main():
     root = parser.parse_args().root
 
     sphere = SPHERE_CAUSTIC.format(
-        sensor=SENSOR.format(fov=35, origin="0, 6, 9", target="0, 0.6, 0"),
-        light=LIGHT.format(size=0.15, x=0.5, y=5, z=-1, radiance=3000),
+        head=HEAD.format(sensor=SENSOR.format(fov=35, origin="0, 6, 9", target="0, 0.6, 0"),
+                         light=LIGHT.format(size=0.15, x=0.5, y=5, z=-1, radiance=3000)),
         floor=FLOOR.format(rgb="0.6, 0.6, 0.6", size=10, y=0),
     )
     write(os.path.join(root, "scenes/sphere-caustic/scene.xml"), sphere)
@@ -144,8 +139,8 @@ def main():
                         "(the set-up of the paper's refractive sphere, Fig. 8), with a mirror sphere beside it."))
 
     pool = POOL_CAUSTIC.format(
-        sensor=SENSOR.format(fov=40, origin="0, 5, 4", target="0, -1, 0"),
-        light=LIGHT.format(size=0.1, x=-1, y=2, z=-1, radiance=8000),
+        head=HEAD.format(sensor=SENSOR.format(fov=40, origin="0, 5, 4", target="0, -1, 0"),
+                         light=LIGHT.format(size=0.1, x=-1, y=2, z=-1, radiance=8000)),
         floor=FLOOR.format(rgb="0.3, 0.6, 0.7", size=4, y=-1),
     )
     write(os.path.join(root, "scenes/pool-caustic/scene.xml"), pool)
