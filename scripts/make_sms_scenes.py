@@ -140,7 +140,7 @@ def main():
 
     pool = POOL_CAUSTIC.format(
         head=HEAD.format(sensor=SENSOR.format(fov=40, origin="0, 5, 4", target="0, -1, 0"),
-                         light=LIGHT.format(size=0.1, x=-1, y=2, z=-1, radiance=8000)),
+                         light=LIGHT.format(size=0.1, x=-1, y=2, z=-1, radiance=1600)),
         floor=FLOOR.format(rgb="0.3, 0.6, 0.7", size=4, y=-1),
     )
     write(os.path.join(root, "scenes/pool-caustic/scene.xml"), pool)
