@@ -69,12 +69,12 @@ void SmsConnection::begin(const Scene &scene) const {
 }
 
 void SmsConnection::end() const {
-    std::fprintf(stderr,
-                 "sms: %" PRIu64 " estimates, %" PRIu64
-                 " solver trials, success rate %.1f%%, mean trials per "
-                 "solution %.2f, runaway guard hits %" PRIu64 "\n",
-                 stats_.estimates.load(), stats_.solves.load(), 100.0 * stats_.successRate(), stats_.meanTrials(),
-                 stats_.guardHits.load());
+    std::fprintf(stderr, "sms: %" PRIu64 " estimates, %" PRIu64 " solver trials, success rate %.1f%%",
+                 stats_.estimates.load(), stats_.solves.load(), 100.0 * stats_.successRate());
+    if (!settings_.biased)
+        std::fprintf(stderr, ", mean trials per solution %.2f, runaway guard hits %" PRIu64, stats_.meanTrials(),
+                     stats_.guardHits.load());
+    std::fprintf(stderr, "\n");
 }
 
 bool SmsConnection::receives(const Intersection &its) const {
