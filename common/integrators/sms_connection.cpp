@@ -72,8 +72,8 @@ void SmsConnection::end() const {
     std::fprintf(stderr, "sms: %" PRIu64 " estimates, %" PRIu64 " solver trials, success rate %.1f%%",
                  stats_.estimates.load(), stats_.solves.load(), 100.0 * stats_.successRate());
     if (!settings_.biased)
-        std::fprintf(stderr, ", mean trials per solution %.2f, runaway guard hits %" PRIu64, stats_.meanTrials(),
-                     stats_.guardHits.load());
+        std::fprintf(stderr, ", trials per solution: mean %.2f, max %" PRIu64 ", runaway guard hits %" PRIu64,
+                     stats_.meanTrials(), stats_.maxTrials.load(), stats_.guardHits.load());
     std::fprintf(stderr, "\n");
 }
 

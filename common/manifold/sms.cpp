@@ -60,7 +60,7 @@ bool sameSolution(const Intersection &a, const Intersection &b, const Vec3 &x1, 
 }  // namespace
 
 void SmsStatistics::reset() {
-    for (auto *c : {&estimates, &solves, &successes, &bernoulli, &solutionsUsed, &guardHits}) c->store(0);
+    for (auto *c : {&estimates, &solves, &successes, &bernoulli, &solutionsUsed, &guardHits, &maxTrials}) c->store(0);
 }
 
 double SmsStatistics::successRate() const {
@@ -176,6 +176,8 @@ Spectrum manifoldSum(const Scene &scene, const Intersection &x1, const Vec3 &x3,
         }
     }
     stats.bernoulli += static_cast<uint64_t>(count);
+    for (uint64_t seen = stats.maxTrials.load(); seen < static_cast<uint64_t>(count);)
+        stats.maxTrials.compare_exchange_weak(seen, static_cast<uint64_t>(count));
     return value * static_cast<double>(count);
 }
 

@@ -54,6 +54,7 @@ struct SmsStatistics {
     std::atomic<uint64_t> bernoulli{0};      // unbiased: trials spent re-finding solutions (the counts N)
     std::atomic<uint64_t> solutionsUsed{0};  // unbiased: first solutions that had a nonzero f (with a count N)
     std::atomic<uint64_t> guardHits{0};      // unbiased: counts stopped by the runaway guard
+    std::atomic<uint64_t> maxTrials{0};      // unbiased: the largest count N
     void reset();
     double successRate() const;
     double meanTrials() const;  // mean N per estimated solution (unbiased)
