@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "integrators/bdpt.h"
+#include "support/agreement.h"
 #include "support/render_util.h"
 
 namespace pf::test {
@@ -23,98 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string readText(const fs::path &path) {
-    std::ifstream in(path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-struct Edit {
-    std::string from, to;
-};
-
-// A shared scene with a box reconstruction filter: light tracing splats into the pixel it hits without a
-// filter, so a comparison with the path tracer needs the same one-pixel footprint on both sides. `edits`
-// are applied to the XML; the scene's other files are linked next to the edited copy.
-std::unique_ptr<Scene> loadSharedScene(const std::string &name, int res, const std::vector<Edit> &edits = {}) {
-    const fs::path src = fs::path(PATHFARM_SOURCE_DIR) / "scenes" / name;
-    const std::string dir = tempDir("bdpt-scene-" + name);
-    for (const auto &entry : fs::directory_iterator(src))
-        if (entry.path().filename() != "scene.xml")
-            fs::create_symlink(entry.path(), fs::path(dir) / entry.path().filename());
-    std::string xml = std::regex_replace(readText(src / "scene.xml"), std::regex(R"(<rfilter type="[a-z]+"\s*/>)"),
-                                         R"(<rfilter type="box"/>)");
-    for (const Edit &e : edits) {
-        const size_t at = xml.find(e.from);
-        EXPECT_NE(at, std::string::npos) << name << ": no '" << e.from << "' to edit";
-        if (at != std::string::npos) xml.replace(at, e.from.size(), e.to);
-    }
-    auto scene = loadScene(writeFile(dir, "scene.xml", xml));
-    scene->resizeFilm(res, res);
-    return scene;
-}
-
-struct BlockStats {
-    std::vector<double> mean, stderr_;  // per block and channel, then the whole image's luminance
-};
-
-BlockStats blockStats(const Scene &scene, const Integrator &integrator, int block, int seeds, int spp) {
-    const Film &film = scene.sensor().film();
-    const int nx = film.cropWidth() / block, ny = film.cropHeight() / block;
-    std::vector<double> sum(static_cast<size_t>(nx * ny * 3 + 1), 0.0), sum2(sum.size(), 0.0);
-    for (int k = 0; k < seeds; ++k) {
-        RenderOptions opt;
-        opt.spp = spp;
-        opt.seed = 7919 * static_cast<uint64_t>(k + 1);
-        opt.threads = 1;
-        RenderStats stats;
-        const Bitmap img = integrator.render(scene, opt, stats);
-        for (int by = 0; by < ny; ++by)
-            for (int bx = 0; bx < nx; ++bx)
-                for (int c = 0; c < 3; ++c) {
-                    const double v =
-                        regionMean(img, bx * block, by * block, (bx + 1) * block, (by + 1) * block, c).mean;
-                    sum[static_cast<size_t>((by * nx + bx) * 3 + c)] += v;
-                    sum2[static_cast<size_t>((by * nx + bx) * 3 + c)] += v * v;
-                }
-        const double v = regionMean(img, 0, 0, nx * block, ny * block).mean;
-        sum.back() += v;
-        sum2.back() += v * v;
-    }
-    BlockStats r;
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double mean = sum[i] / seeds;
-        r.mean.push_back(mean);
-        r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
-    }
-    return r;
-}
-
-// Block means of BDPT and of a reference must agree within 5 combined standard errors (32 seeds: a
-// Student t with 31 degrees of freedom, so that the ~400 comparisons of this file raise a false alarm with
-// probability under 1%), and the errors must be small enough for that to mean something: the median
-// block error under 3% of its mean. The whole image's luminance is compared too.
+// 32 seeds and 8x8 blocks: the ~400 comparisons of this file (support/agreement.h).
 constexpr int kSeeds = 32, kBlock = 8;
-
-void expectAgreement(const BlockStats &a, const BlockStats &b, const std::string &what) {
-    std::vector<double> relative;
-    const double imageMean = a.mean.back();
-    for (size_t i = 0; i < a.mean.size(); ++i) {
-        const double se = std::hypot(a.stderr_[i], b.stderr_[i]);
-        const bool whole = i + 1 == a.mean.size();
-        EXPECT_NEAR(b.mean[i], a.mean[i], 5 * se)
-            << what
-            << (whole ? ": whole image" : ": block " + std::to_string(i / 3) + " channel " + std::to_string(i % 3));
-        if (!whole && a.mean[i] > 0.01 * imageMean) relative.push_back(se / a.mean[i]);
-    }
-    ASSERT_FALSE(relative.empty());
-    std::sort(relative.begin(), relative.end());
-    const double median = relative[relative.size() / 2];
-    EXPECT_LT(median, 0.03) << what << ": too noisy to compare";
-    std::printf("%s: median block standard error %.2f%%, image %.4g vs %.4g +- %.2g\n", what.c_str(), 100 * median,
-                b.mean.back(), a.mean.back(), std::hypot(a.stderr_.back(), b.stderr_.back()));
-}
 
 void expectAgreement(const Scene &scene, const Integrator &reference, int referenceSpp, const Integrator &bdpt,
                      int bdptSpp, const std::string &what) {

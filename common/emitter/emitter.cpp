@@ -15,6 +15,7 @@ void Emitter::configureCommon(const Properties &props) {
     // Zero would take the emitter out of light selection while BSDF sampling can still hit it, which
     // leaves the emitter-selection distribution of an all-zero scene undefined.
     if (!(samplingWeight_ > 0)) props.fail("samplingWeight", "must be positive");
+    if (props.has("causticEmitter")) causticEmitter_ = props.getBool("causticEmitter");
 }
 
 }  // namespace pf

@@ -10,6 +10,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/spectrum.h"
@@ -73,6 +74,9 @@ public:
 
     // Sampling weight for emitter selection (Mitsuba's samplingWeight, default 1).
     double samplingWeight() const { return samplingWeight_; }
+    // Whether specular manifold sampling connects to this emitter (XML boolean causticEmitter, an extension of
+    // Mitsuba 0.6; nullopt when not given, see manifold/sms.h for the default).
+    std::optional<bool> causticEmitter() const { return causticEmitter_; }
     // Total emitted power (used for display and statistics).
     virtual Spectrum power() const = 0;
 
@@ -86,6 +90,7 @@ protected:
 
     uint32_t flags_ = 0;
     double samplingWeight_ = 1.0;
+    std::optional<bool> causticEmitter_;
     const Shape *shape_ = nullptr;
 };
 

@@ -8,6 +8,7 @@
 #include "integrators/mmlt.h"
 #include "integrators/path.h"
 #include "integrators/pssmlt.h"
+#include "integrators/sms_connection.h"
 
 namespace pf {
 
@@ -25,6 +26,10 @@ const std::map<std::string, Factory> &factories() {
         {"mmlt", [](const Properties &p) { return std::make_unique<MMLT>(p); }},
         {"path", [](const Properties &p) { return std::make_unique<PathTracer>(p, false); }},
         {"pssmlt", [](const Properties &p) { return std::make_unique<PSSMLT>(p); }},
+        {"sms",
+         [](const Properties &p) {
+             return std::make_unique<PathTracer>(p, false, std::make_shared<SmsConnection>(p));
+         }},
         {"volpath", [](const Properties &p) { return std::make_unique<PathTracer>(p, true); }},
     };
     return table;

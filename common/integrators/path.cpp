@@ -22,6 +22,8 @@
 //   (volpath: "rRec.depth++ >= m_rrDepth" after each scattering event, the crossings counted).
 // * `path` is this estimator with media ignored (Mitsuba's path tracer does not render media): every
 //   segment is vacuum and index-matched boundaries are plain pass-through.
+// * With a caustic connection strategy (`sms`), the strategy runs at every non-specular vertex it receives
+//   at, and the emitter hits of the paths it estimates are left out here (caustic_connection.h).
 #include "integrators/path.h"
 
 #include "bsdf/bsdf.h"
@@ -46,13 +48,16 @@ bool withinBudget(int crossings, int budget) { return budget < 0 || crossings <=
 // Radiance arriving at `ref` along the sampled direction ray.d (ray leaves ref in `medium`): each
 // emitter the direction reaches through at most `budget` index-matched surfaces contributes its
 // radiance times the transmittance up to it, and the environment contributes if the direction leaves
-// the scene within the budget.
+// the scene within the budget. An emitter hit first (nothing crossed) that `leaveOut` connects to is left
+// to that strategy.
 Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, const Medium *medium, bool trackMedia,
-                       double dirPdf, bool delta, Intersection &next, int budget) {
+                       double dirPdf, bool delta, Intersection &next, int budget,
+                       const CausticConnection *leaveOut = nullptr) {
     Spectrum L;
     int crossed = 0;  // surfaces passed before the one visited (every visited surface but a blocker is passed)
     const auto visit = [&](const Intersection &its, const Spectrum &T) {
-        if (its.isEmitter() && withinBudget(crossed, budget))
+        const bool left = leaveOut && crossed == 0 && its.isEmitter() && leaveOut->connectsTo(*its.emitter());
+        if (its.isEmitter() && withinBudget(crossed, budget) && !left)
             L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
         ++crossed;
     };
@@ -84,13 +89,21 @@ Spectrum directLight(const Scene &scene, const DirectSample &ds, const Spectrum 
 
 }  // namespace
 
-PathTracer::PathTracer(const Properties &props, bool media) : media_(media) {
+PathTracer::PathTracer(const Properties &props, bool media, std::shared_ptr<const CausticConnection> caustics)
+    : media_(media), caustics_(std::move(caustics)) {
     maxDepth_ = static_cast<int>(props.getInt("maxDepth", -1));
     rrDepth_ = static_cast<int>(props.getInt("rrDepth", 5));
     strictNormals_ = props.getBool("strictNormals", false);
     hideEmitters_ = props.getBool("hideEmitters", false);
     if (maxDepth_ < -1 || maxDepth_ == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth_ < 1) props.fail("rrDepth", "must be at least 1");
+}
+
+Bitmap PathTracer::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
+    if (caustics_) caustics_->begin(scene);
+    Bitmap image = SamplingIntegrator::render(scene, opt, stats);
+    if (caustics_) caustics_->end();
+    return image;
 }
 
 Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary) const {
@@ -109,6 +122,8 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
     // Before the first scattering event emission is counted where the path meets it; afterwards
     // emissionAlong has already counted it at the vertex that sampled the direction.
     bool scattered = false;
+    // Whether the last vertex ran the caustic strategy and left by a smooth lobe (caustic_connection.h).
+    bool afterReceiver = false;
 
     for (;;) {
         MediumSample ms;
@@ -154,6 +169,9 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             // Mitsuba's strictNormals: the geometric and shading normals must agree on the incident side.
             if (!passOnly && strictNormals_ && dot(ray.d, its.n) * Frame::cosTheta(its.wi) >= 0) break;
 
+            const bool receiver = !passOnly && caustics_ && (bsdf->flags() & BSDFFlags::Smooth) &&
+                                  (maxDepth_ < 0 || depth + 1 < maxDepth_) && caustics_->receives(its);
+            if (receiver) L += throughput * caustics_->estimate(scene, sampler, its);
             if (!passOnly && (bsdf->flags() & BSDFFlags::Smooth)) {
                 DirectSample ds(its.p, its.n);
                 const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
@@ -173,6 +191,8 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             if (!passOnly && strictNormals_ && dot(wo, its.n) * Frame::cosTheta(bs.wo) <= 0) break;
             throughput *= weight;
             eta *= bs.eta;
+            const bool leaveOut = afterReceiver && caustics_->casts(its, bs.sampledType);
+            afterReceiver = receiver && (bs.sampledType & BSDFFlags::Smooth) != 0;
             if (media_) medium = mediumAfter(its, wo, medium);
             origin = its.p;
             ray = scene.spawnRay(its, wo);
@@ -188,7 +208,8 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
                 continue;
             }
             L += throughput * emissionAlong(scene, ray, origin, medium, media_, bs.pdf,
-                                            (bs.sampledType & BSDFFlags::Delta) != 0, its, budget);
+                                            (bs.sampledType & BSDFFlags::Delta) != 0, its, budget,
+                                            leaveOut ? caustics_.get() : nullptr);
         }
 
         // `its` now holds the first surface along the sampled direction, found by emissionAlong.

@@ -48,6 +48,8 @@ void Shape::configureCommon(const Properties &props) {
     if (!bsdfs.empty()) bsdf_ = childAs<BSDF>(props, bsdfs[0], "BSDF");
     interior_ = childAs<Medium>(props, props.child(ObjectKind::Medium, "interior"), "medium");
     exterior_ = childAs<Medium>(props, props.child(ObjectKind::Medium, "exterior"), "medium");
+    if (props.has("causticCaster")) causticCaster_ = props.getBool("causticCaster");
+    if (props.has("causticReceiver")) causticReceiver_ = props.getBool("causticReceiver");
 
     // Mitsuba 0.6 (Shape::configure): emitters without a BSDF absorb everything, medium boundaries without
     // one are index-matched (null), and any other shape gets a 50% diffuse reflector.

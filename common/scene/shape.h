@@ -5,6 +5,7 @@
 #include <embree3/rtcore.h>
 
 #include <memory>
+#include <optional>
 
 #include "core/vector.h"
 #include "scene/intersection.h"
@@ -45,6 +46,11 @@ public:
     const std::shared_ptr<BSDF> &bsdfPtr() const { return bsdf_; }
     const std::shared_ptr<Emitter> &emitterPtr() const { return emitter_; }
 
+    // Specular manifold sampling's roles (ALGORITHMS.md §7.1; XML booleans causticCaster / causticReceiver,
+    // which Mitsuba 0.6 does not have): nullopt when the scene leaves them to the defaults of manifold/sms.h.
+    std::optional<bool> causticCaster() const { return causticCaster_; }
+    std::optional<bool> causticReceiver() const { return causticReceiver_; }
+
     void setBSDF(std::shared_ptr<BSDF> b) { bsdf_ = std::move(b); }
     void setEmitter(std::shared_ptr<Emitter> e) { emitter_ = std::move(e); }
     void setMedia(std::shared_ptr<Medium> interior, std::shared_ptr<Medium> exterior) {
@@ -61,6 +67,7 @@ private:
     std::shared_ptr<BSDF> bsdf_;
     std::shared_ptr<Emitter> emitter_;
     std::shared_ptr<Medium> interior_, exterior_;
+    std::optional<bool> causticCaster_, causticReceiver_;
 };
 
 }  // namespace pf
