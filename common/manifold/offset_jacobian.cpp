@@ -11,6 +11,10 @@ namespace pf {
 std::optional<double> offsetJacobian(const std::vector<ManifoldVertex> &chain, size_t free,
                                      const std::vector<size_t> &glossy) {
     if (glossy.empty()) return 1.0;
+    // Medium vertices need their length rows (chain_jacobian.h) and the segment as a held coordinate: not done.
+    if (std::any_of(chain.begin(), chain.end(),
+                    [](const ManifoldVertex &v) { return v.type == ManifoldVertexType::Medium; }))
+        return std::nullopt;
     const size_t k = chain.size();
     if (k < 3 || free + 1 >= k) return std::nullopt;
     const bool hasFree = free != 0;

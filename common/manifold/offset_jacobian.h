@@ -24,9 +24,10 @@ namespace pf {
 
 // The factor for chain x_a … x_c (chain order; ends unconstrained), whose vertex `free` (an interior index)
 // is the unconstrained x_b and whose other interior vertices are constrained (free = 0: x_b is the end x_a
-// itself, as for the endpoint position perturbation, and M is the A-type matrix of the interior); `glossy` lists the interior
-// indices of the glossy ones (offset manifolds), the rest being ideal specular. 1 without glossy vertices.
-// nullopt on a degenerate chain or a singular M (a caustic fold).
+// itself, as for the endpoint position perturbation, and M is the A-type matrix of the interior); `glossy` lists the
+// interior indices of the glossy ones (offset manifolds), the rest being ideal specular. 1 without glossy vertices.
+// nullopt on a degenerate chain or a singular M (a caustic fold), and for chains with medium vertices (§6.7),
+// whose factor would also need their length rows and segment lengths as held coordinates (not implemented).
 std::optional<double> offsetJacobian(const std::vector<ManifoldVertex> &chain, size_t free,
                                      const std::vector<size_t> &glossy);
 
