@@ -18,8 +18,10 @@
 
 #include "core/frame.h"
 #include "core/rng.h"
+#include "manifold/dense_system.h"
 #include "manifold/generalized_geometry.h"
 #include "manifold/manifold_walk.h"
+#include "manifold/offset_jacobian.h"
 #include "manifold/specular_constraint.h"
 #include "scene/scene.h"
 #include "support/render_util.h"
@@ -259,6 +261,68 @@ TEST(ManifoldMedium, PropagationReproducesTheChainAndItsGeometryTerm) {
         const Vec3 ds = (landing(h, 0) - landing(-h, 0)) / (2 * h), dt = (landing(0, h) - landing(0, -h)) / (2 * h);
         // A point has no cosine: G is the solid angle at x_1 per unit area at the floor.
         EXPECT_NEAR(*g * cross(ds, dt).length(), 1.0, 1e-4) << "trial " << trial;
+    }
+}
+
+// The offset Jacobian with medium vertices (offset_jacobian.h): on a chain x_a, M_1, M_2, x_b, M_3, x_c (x_a, x_c
+// fixed points, x_b on the floor, the medium vertices walked from x_a before x_b and from x_c after it), the
+// factor |∂[x_b, M_1, M_2, M_3] / ∂[x_b, (o, ℓ)_1, (o, ℓ)_2, (o, ℓ)_3]| against 1 / |det| of the finite-difference
+// Jacobian of the map from positions (x_b's chart, each M's three world axes) to those coordinates.
+TEST(ManifoldMedium, OffsetJacobianMatchesFiniteDifferences) {
+    const auto scene = glassSphere();
+    PCG32 rng(17, 7);
+    for (int trial = 0; trial < 20; ++trial) {
+        Intersection floor;
+        ASSERT_TRUE(scene->intersect(Ray(Vec3(uniform(rng, 2, 3), uniform(rng, 2, 3), -2.5), Vec3(0, 0, -1)), floor));
+        const Vec3 a(uniform(rng, 1, 2), uniform(rng, 1, 2), 1), c(uniform(rng, 3, 4), uniform(rng, 3, 4), -1);
+        const Vec3 m1 = a + Vec3(uniform(rng, 0, 1), uniform(rng, 0, 1), -0.8);
+        const Vec3 m2 = m1 + Vec3(uniform(rng, 0, 1), uniform(rng, 0, 1), -0.8);
+        const Vec3 m3 = c + Vec3(uniform(rng, -1, 0), uniform(rng, -1, 0), -0.8);
+        const std::vector<ManifoldVertex> chain = {
+            ManifoldVertex::fixedPosition(a),         *ManifoldVertex::medium(m1, a, m2),
+            *ManifoldVertex::medium(m2, m1, floor.p), *ManifoldVertex::surface(floor),
+            *ManifoldVertex::medium(m3, floor.p, c),  ManifoldVertex::fixedPosition(c)};
+        const std::optional<double> j = offsetJacobian(chain, 3, {1, 2, 4});
+        ASSERT_TRUE(j);
+
+        const ManifoldVertex &b = chain[3];
+        const auto coordinates = [&](const std::vector<Vec3> &p) {
+            const auto medium = [](const Vec3 &q) {
+                ManifoldVertex v = ManifoldVertex::fixedPosition(q);
+                v.type = ManifoldVertexType::Medium;
+                return v;
+            };
+            const auto point = [](const Vec3 &q) { return ManifoldVertex::fixedPosition(q); };
+            const Vec2 c1 = *constraintValue(point(a), medium(p[0]), point(p[1]));
+            const Vec2 c2 = *constraintValue(point(p[0]), medium(p[1]), point(p[2]));
+            const Vec2 c3 = *constraintValue(point(c), medium(p[3]), point(p[2]));
+            return std::vector<double>{dot(p[2], b.dpdu),
+                                       dot(p[2], b.dpdv),
+                                       c1.x,
+                                       c1.y,
+                                       (p[0] - a).length(),
+                                       c2.x,
+                                       c2.y,
+                                       (p[1] - p[0]).length(),
+                                       c3.x,
+                                       c3.y,
+                                       (p[3] - c).length()};
+        };
+        const std::vector<Vec3> base = {m1, m2, floor.p, m3};
+        // The moves: x_b along its chart, each medium vertex along the world axes.
+        std::vector<std::pair<size_t, Vec3>> moves = {{2, b.dpdu}, {2, b.dpdv}};
+        for (const size_t v : {0u, 1u, 3u})
+            for (const Vec3 &e : {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}) moves.emplace_back(v, e);
+        DenseSystem jacobian(moves.size());
+        constexpr double h = 1e-6;
+        for (size_t col = 0; col < moves.size(); ++col) {
+            std::vector<Vec3> plus = base, minus = base;
+            plus[moves[col].first] += moves[col].second * h;
+            minus[moves[col].first] -= moves[col].second * h;
+            const std::vector<double> fp = coordinates(plus), fm = coordinates(minus);
+            for (size_t row = 0; row < moves.size(); ++row) jacobian(row, col) = (fp[row] - fm[row]) / (2 * h);
+        }
+        EXPECT_NEAR(*j * jacobian.absDeterminant(), 1.0, 1e-5) << "trial " << trial;
     }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "manifold/dense_system.h"
 #include "manifold/specular_constraint.h"
 
 namespace pf {
@@ -24,47 +25,6 @@ bool validLayout(const std::vector<ManifoldVertex> &chain) {
     if (chain[0].scattering != Scattering::None) return false;
     return !chain[k - 1].isConstrained();
 }
-
-// A dense n x n system in row-major order, solved by Gaussian elimination with partial pivoting.
-class DenseSystem {
-public:
-    explicit DenseSystem(size_t n) : n_(n), m_(n * n, 0.0) {}
-    double &operator()(size_t r, size_t c) { return m_[r * n_ + c]; }
-    // Solves A X = B in place for the columns of b (n rows of `cols` entries each). False when a pivot is
-    // negligible against the largest entry of A (singular, like BlockTridiagonal's relative test).
-    bool solve(std::vector<double> &b, size_t cols) {
-        double scale = 0;
-        for (const double x : m_) scale = std::max(scale, std::abs(x));
-        if (!(scale > 0) || !std::isfinite(scale)) return false;
-        for (size_t k = 0; k < n_; ++k) {
-            size_t pivot = k;
-            for (size_t r = k + 1; r < n_; ++r)
-                if (std::abs((*this)(r, k)) > std::abs((*this)(pivot, k))) pivot = r;
-            if (!(std::abs((*this)(pivot, k)) > 1e-13 * scale)) return false;
-            if (pivot != k) {
-                for (size_t c = 0; c < n_; ++c) std::swap((*this)(k, c), (*this)(pivot, c));
-                for (size_t c = 0; c < cols; ++c) std::swap(b[k * cols + c], b[pivot * cols + c]);
-            }
-            for (size_t r = k + 1; r < n_; ++r) {
-                const double f = (*this)(r, k) / (*this)(k, k);
-                if (f == 0) continue;
-                for (size_t c = k; c < n_; ++c) (*this)(r, c) -= f * (*this)(k, c);
-                for (size_t c = 0; c < cols; ++c) b[r * cols + c] -= f * b[k * cols + c];
-            }
-        }
-        for (size_t k = n_; k-- > 0;)
-            for (size_t c = 0; c < cols; ++c) {
-                double x = b[k * cols + c];
-                for (size_t j = k + 1; j < n_; ++j) x -= (*this)(k, j) * b[j * cols + c];
-                b[k * cols + c] = x / (*this)(k, k);
-            }
-        return true;
-    }
-
-private:
-    size_t n_;
-    std::vector<double> m_;
-};
 
 }  // namespace
 
