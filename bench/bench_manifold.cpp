@@ -134,20 +134,22 @@ pf::ChainImage chainsOnOneCore(const pf::Scene &scene, const pf::ChainIntegrator
 }
 
 // Table 1's walk columns from a chain's counters: walks per mutation, converged %, mean Newton iterations,
-// mean and largest specular chain, reverse walks and non-reversible %.
+// mean and largest specular chain, reverse walks and non-reversible %, and the medium vertices that proposals
+// walked in chains per walk (§6.7).
 std::string walkColumns(pf::ChainCounters counters, uint64_t proposed) {
     const auto value = [&](const char *name) { return pf::counter(counters, name).value; };
     const double walks = value("manifoldWalks"), reverse = value("manifoldReverseWalks");
     const double perWalk = walks > 0 ? 1 / walks : 0;
-    char line[160];
-    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%%", walks,
+    char line[180];
+    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%% %6.2f", walks,
                   proposed ? walks / static_cast<double>(proposed) : 0.0,
                   100 * value("manifoldWalksConverged") * perWalk, value("manifoldNewtonIterations") * perWalk,
                   value("manifoldChainVertices") * perWalk, value("manifoldChainVerticesMax"), reverse,
-                  reverse > 0 ? 100 * value("manifoldNonReversible") / reverse : 0.0);
+                  reverse > 0 ? 100 * value("manifoldNonReversible") / reverse : 0.0,
+                  value("manifoldMediumVertices") * perWalk);
     return line;
 }
-const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev";
+const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev  media";
 
 void printTable1(const std::string &label, const pf::ChainImage &image) {
     const uint64_t proposed = sumProposed(image.counts, false), accepted = sumProposed(image.counts, true);

@@ -226,7 +226,9 @@ INSTANTIATE_TEST_SUITE_P(
         BalanceCase{"torus", MutationType::Manifold}, BalanceCase{"glossy-spheres", MutationType::Manifold},
         BalanceCase{"glossy-spheres-analytic", MutationType::Manifold},
         BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold},
-        BalanceCase{"volumetric-caustic", MutationType::MediumDistance}),
+        BalanceCase{"volumetric-caustic", MutationType::MediumDistance},
+        BalanceCase{"volumetric-caustic", MutationType::Manifold}, BalanceCase{"glass-egg", MutationType::Manifold},
+        BalanceCase{"glass-egg", MutationType::MediumDistance}),
     [](const ::testing::TestParamInfo<BalanceCase> &info) {
         std::string name = info.param.scene + "_" + mutationName(info.param.type);
         for (char &ch : name)
@@ -467,13 +469,40 @@ TEST(MediumDistance, DensityMatchesSampler) {
 // 1 / |det J| by central differences, is T_M(x -> y) of manifold_perturbation.h: the reported canonical density
 // times measureConversion() (rho of each ideal specular sub-chain, and the offset Jacobian), over the strategy's
 // probability.
+//
+// Through media the sampler also has to cross the traced edges (free-flight survival, the walk's own edge
+// densities), which the Jacobian does not see; T holds them, and rho the sensor walk's densities of the ideal
+// sub-chains' edges (manifold_perturbation.h), so both come out of the comparison: walkedOverSensor(). In
+// glass-egg (a g = 0.8 medium in glass) medium vertices join the chains (§6.7), more often with a larger
+// classification angle dtheta (20 degrees there).
 class ManifoldChains : public ::testing::TestWithParam<std::string> {};
+
+// The walk's probability of crossing the edges it traced from `from` to `to` (those into a medium vertex of a
+// chain are placed, not traced), over the sensor walk's densities of the edges of ideal sub-chains.
+double walkedOverSensor(const PathView &y, int from, int to) {
+    const int dir = to > from ? 1 : -1;
+    const int mode = modeIndex(dir > 0 ? TransportMode::Importance : TransportMode::Radiance);
+    double ratio = 1.0;
+    for (int u = from; u != to;) {
+        int w = u + dir;
+        while (w != to && !isNonSpecular(y.vertex(w))) w += dir;
+        for (int e = u; e != w; e += dir) {
+            const PathEdge &edge = y.edge(std::min(e, e + dir));
+            const bool held = e + dir == w && w != to && y.vertex(w).type == VertexType::Medium;
+            ratio *= (held ? 1.0 : edge.pdf[mode]) /
+                     (std::abs(w - u) > 1 ? edge.pdf[modeIndex(TransportMode::Radiance)] : 1.0);
+        }
+        u = w;
+    }
+    return ratio;
+}
 
 TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
     auto scene = testScene(GetParam());
-    const ManifoldPerturbation mutation(*scene, 50.0, kGlossyAngle);
+    const bool media = GetParam().rfind("glass-egg", 0) == 0;
+    const ManifoldPerturbation mutation(*scene, 50.0, media ? 20 * kGlossyAngle : kGlossyAngle);
     const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
-    int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, outliers = 0;
+    int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, mediumChains = 0, outliers = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 80; ++i) {
         const MutablePath &x = paths[i];
@@ -519,8 +548,10 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
             const ManifoldPerturbation::Strategy st{source, moving, fixed};
             const double strategy =
                 mutation.classificationProbability(x, st) / static_cast<double>(mutation.sources(x).size());
+            double crossed = walkedOverSensor(y, source, moving);
+            if (specular2) crossed *= walkedOverSensor(y, fixed, moving);
             const double manifold =
-                mutation.density(*scene, x, y, record) / strategy * mutation.measureConversion(y, st);
+                mutation.density(*scene, x, y, record) / strategy * mutation.measureConversion(y, st) / crossed;
             const double relative = std::abs(manifold * det - 1);
             worst = std::max(worst, relative);
             ++checked;
@@ -528,7 +559,7 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
             secondChain += specular2;
             for (int v = std::min(source, fixed) + 1; v < std::max(source, fixed); ++v)
                 if (v != moving && isNonSpecular(y.vertex(v))) {
-                    ++glossy;
+                    ++(y.vertex(v).type == VertexType::Medium ? mediumChains : glossy);
                     break;
                 }
             // Rays leave surfaces from offset origins (Scene::spawnRay), which the sampler sees and the
@@ -543,19 +574,22 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
         }
     }
     std::printf(
-        "%s manifold: %d proposals across chains (%d first, %d second, %d with glossy vertices walked as "
-        "specular), worst %.2g, %d above 2e-3\n",
-        GetParam().c_str(), checked, firstChain, secondChain, glossy, worst, outliers);
+        "%s manifold: %d proposals across chains (%d first, %d second, %d with glossy and %d with medium vertices "
+        "walked as specular), worst %.2g, %d above 2e-3\n",
+        GetParam().c_str(), checked, firstChain, secondChain, glossy, mediumChains, worst, outliers);
     EXPECT_GE(checked, 20) << "too few proposals checked";
     EXPECT_LE(outliers, checked / 20) << "more than 5% of the proposals are off by more than 2e-3";
     if (GetParam().rfind("glossy-spheres", 0) == 0) {
         EXPECT_GE(glossy, 20) << "too few glossy chains checked";
     }
+    if (media) {
+        EXPECT_GE(mediumChains, 20) << "too few medium chains checked";
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ManifoldChains,
                          ::testing::Values("ring-caustic", "pool", "pool-underwater", "torus", "glossy-spheres",
-                                           "glossy-spheres-analytic"),
+                                           "glossy-spheres-analytic", "glass-egg-largelight"),
                          [](const ::testing::TestParamInfo<std::string> &info) {
                              std::string name = info.param;
                              for (char &ch : name)

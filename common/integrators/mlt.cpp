@@ -61,6 +61,7 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
+    mediumChains_ = props.getBool("mediumChains", true);
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -99,7 +100,8 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
             case MutationType::Manifold:
-                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_));
+                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_,
+                                                               mediumChains_));
                 break;
             case MutationType::MediumDistance:
                 set.add(std::make_unique<MediumDistancePerturbation>());
