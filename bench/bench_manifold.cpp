@@ -3,7 +3,8 @@
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
 //   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
-//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept] [--table1 0|1] [--references DIR] [--ref-spp N]
+//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia] [--table1 0|1] [--references DIR]
+//                  [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
 //   bench_manifold --sweep-lambda L1,.. [--sweep-length M1,..] [--sweep-seeds N1,..] [same options] [scene ...]
 //   bench_manifold --write-references K [--ref-spp N] [--res N] [--threads N] [--references DIR] [scene.xml ...]
@@ -81,10 +82,13 @@ struct Params {
     int64_t chainLength = 100, spp = 0;
 };
 
-bool isBurst(const std::string &type) { return type == "erpt" || type == "mept"; }
+// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes.
+bool isBurst(const std::string &type) { return type == "erpt" || type == "mept" || type == "mept-nomedia"; }
 
-std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &type, const Params &p) {
+std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &method, const Params &p) {
+    const std::string type = method == "mept-nomedia" ? "mept" : method;
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
+    if (method != type) props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
     // lambda 0: "auto" (the pilot tunes it; mept only, memlt keeps its default).
