@@ -3,7 +3,8 @@
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
 //   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
-//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept] [--table1 0|1] [--references DIR] [--ref-spp N]
+//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia] [--table1 0|1] [--references DIR]
+//                  [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
 //   bench_manifold --sweep-lambda L1,.. [--sweep-length M1,..] [--sweep-seeds N1,..] [same options] [scene ...]
 //   bench_manifold --write-references K [--ref-spp N] [--res N] [--threads N] [--references DIR] [scene.xml ...]
@@ -81,10 +82,13 @@ struct Params {
     int64_t chainLength = 100, spp = 0;
 };
 
-bool isBurst(const std::string &type) { return type == "erpt" || type == "mept"; }
+// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes.
+bool isBurst(const std::string &type) { return type == "erpt" || type == "mept" || type == "mept-nomedia"; }
 
-std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &type, const Params &p) {
+std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &method, const Params &p) {
+    const std::string type = method == "mept-nomedia" ? "mept" : method;
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
+    if (method != type) props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
     // lambda 0: "auto" (the pilot tunes it; mept only, memlt keeps its default).
@@ -134,20 +138,22 @@ pf::ChainImage chainsOnOneCore(const pf::Scene &scene, const pf::ChainIntegrator
 }
 
 // Table 1's walk columns from a chain's counters: walks per mutation, converged %, mean Newton iterations,
-// mean and largest specular chain, reverse walks and non-reversible %.
+// mean and largest specular chain, reverse walks and non-reversible %, and the medium vertices that proposals
+// walked in chains per walk (§6.7).
 std::string walkColumns(pf::ChainCounters counters, uint64_t proposed) {
     const auto value = [&](const char *name) { return pf::counter(counters, name).value; };
     const double walks = value("manifoldWalks"), reverse = value("manifoldReverseWalks");
     const double perWalk = walks > 0 ? 1 / walks : 0;
-    char line[160];
-    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%%", walks,
+    char line[180];
+    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%% %6.2f", walks,
                   proposed ? walks / static_cast<double>(proposed) : 0.0,
                   100 * value("manifoldWalksConverged") * perWalk, value("manifoldNewtonIterations") * perWalk,
                   value("manifoldChainVertices") * perWalk, value("manifoldChainVerticesMax"), reverse,
-                  reverse > 0 ? 100 * value("manifoldNonReversible") / reverse : 0.0);
+                  reverse > 0 ? 100 * value("manifoldNonReversible") / reverse : 0.0,
+                  value("manifoldMediumVertices") * perWalk);
     return line;
 }
-const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev";
+const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev  media";
 
 void printTable1(const std::string &label, const pf::ChainImage &image) {
     const uint64_t proposed = sumProposed(image.counts, false), accepted = sumProposed(image.counts, true);

@@ -34,6 +34,7 @@
 #include "path/lens_perturbation.h"
 #include "path/lens_subpath_mutation.h"
 #include "path/manifold_perturbation.h"
+#include "path/medium_distance_perturbation.h"
 #include "path/multichain_perturbation.h"
 #include "path/path_chain.h"
 #include "render/image_task.h"
@@ -83,6 +84,7 @@ MutationSet allMutations(const Scene &scene) {
     set.add(std::make_unique<CausticPerturbation>(scale));
     set.add(std::make_unique<MultiChainPerturbation>(scale));
     set.add(std::make_unique<ManifoldPerturbation>(scene, 50.0, kGlossyAngle));
+    set.add(std::make_unique<MediumDistancePerturbation>());
     return set;
 }
 
@@ -91,9 +93,9 @@ MutationSet allMutations(const Scene &scene) {
 std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
     const MutationSet set = allMutations(scene);
     ImageBlock film = makeFilmBlock(scene);
-    MutationCounts counts =
-        PathChain::mutationTypes({MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens,
-                                  MutationType::Caustic, MutationType::MultiChain, MutationType::Manifold});
+    MutationCounts counts = PathChain::mutationTypes(
+        {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens, MutationType::Caustic,
+         MutationType::MultiChain, MutationType::Manifold, MutationType::MediumDistance});
     PCG32 rng(5, 7);
     std::vector<MutablePath> paths;
     for (const MutablePath &x : bdptPaths(scene, count / 2)) {
@@ -223,7 +225,10 @@ INSTANTIATE_TEST_SUITE_P(
         BalanceCase{"pool", MutationType::Manifold}, BalanceCase{"pool-underwater", MutationType::Manifold},
         BalanceCase{"torus", MutationType::Manifold}, BalanceCase{"glossy-spheres", MutationType::Manifold},
         BalanceCase{"glossy-spheres-analytic", MutationType::Manifold},
-        BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold}),
+        BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold},
+        BalanceCase{"volumetric-caustic", MutationType::MediumDistance},
+        BalanceCase{"volumetric-caustic", MutationType::Manifold}, BalanceCase{"glass-egg", MutationType::Manifold},
+        BalanceCase{"glass-egg", MutationType::MediumDistance}),
     [](const ::testing::TestParamInfo<BalanceCase> &info) {
         std::string name = info.param.scene + "_" + mutationName(info.param.type);
         for (char &ch : name)
@@ -321,6 +326,14 @@ double finiteDifferenceDensity(const Scene &scene, const Mutation &mutation, con
     return det > 0 ? 1.0 / det : 0.0;
 }
 
+// A proposal from x (if the mutation applies) with a nonzero contribution, drawn with `sampler` (whose numbers
+// are kept for finite differences).
+bool drawProposal(const Scene &scene, const Mutation &mutation, const MutablePath &x, ReplaySampler &sampler,
+                  MutablePath &y, MutationRecord &record) {
+    return mutation.applies(x) && mutation.sample(scene, sampler, x, y, record) &&
+           chainContribution(scene, y).luminance() > 0;
+}
+
 struct JacobianCase {
     std::string scene;
     MutationType type;
@@ -339,12 +352,10 @@ TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
         const MutablePath &x = paths[i];
-        if (!mutation.applies(x)) continue;
         ReplaySampler sampler({}, 1000 + i);
         MutablePath y;
         MutationRecord record;
-        if (!mutation.sample(*scene, sampler, x, y, record) || !(chainContribution(*scene, y).luminance() > 0))
-            continue;
+        if (!drawProposal(*scene, mutation, x, sampler, y, record)) continue;
         const double fd = finiteDifferenceDensity(*scene, mutation, x, sampler.numbers(), y, record);
         if (!(fd > 0)) continue;
         ++checked;
@@ -411,18 +422,87 @@ INSTANTIATE_TEST_SUITE_P(Scenes, DensityMatchesSampler,
                              return name;
                          });
 
+// The medium-distance perturbation (path/medium_distance_perturbation.h) through volumetric-caustic's fog: its
+// proposal keeps the direction from the anchor, so its sampler is one-dimensional in the distance t'. T(x -> y)
+// times t'^2 (the volume element along the fixed direction) and the number of sources must be the density of t'
+// under the random numbers, 1/2 (the sign) over |dt'/du| by central differences. The t'^2 itself is checked by
+// rendering (test_erpt: bursts of this perturbation alone agree with BDPT).
+TEST(MediumDistance, DensityMatchesSampler) {
+    auto scene = testScene("volumetric-caustic");
+    const MediumDistancePerturbation mutation;
+    int checked = 0;
+    double worst = 0;
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 600);
+    for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
+        const MutablePath &x = paths[i];
+        MutablePath y;
+        MutationRecord record;
+        ReplaySampler sampler({}, 2000 + i);
+        if (!drawProposal(*scene, mutation, x, sampler, y, record)) continue;
+        const Vec3 &anchor = x.vertex(record.source).position();
+        const auto distance = [&](double delta) {
+            std::vector<double> u = sampler.numbers();
+            u[1] += delta;
+            ReplaySampler replay(u);
+            MutablePath z;
+            MutationRecord r;
+            return mutation.sample(*scene, replay, x, z, r) ? (z.vertex(record.moving).position() - anchor).length()
+                                                            : -1.0;
+        };
+        constexpr double h = 1e-7;
+        const double plus = distance(h), minus = distance(-h);
+        if (sampler.numbers()[1] <= h || sampler.numbers()[1] >= 1 - h || plus < 0 || minus < 0) continue;
+        const double t = (y.vertex(record.moving).position() - anchor).length();
+        const double sampled = 0.5 / std::abs((plus - minus) / (2 * h));
+        const double reported =
+            mutation.density(*scene, x, y, record) * t * t * static_cast<double>(mutation.sources(x).size());
+        ++checked;
+        worst = std::max(worst, std::abs(reported / sampled - 1));
+        EXPECT_NEAR(reported / sampled, 1.0, 1e-5) << "path " << i;
+    }
+    std::printf("volumetric-caustic mediumDistance: %d densities, worst relative difference %.2g\n", checked, worst);
+    EXPECT_GE(checked, 20) << "too few proposals checked";
+}
+
 // The manifold perturbation across specular and glossy chains. Only x'_b moves freely (the chain vertices follow
 // it, on x's offset manifold), so the area density of x'_b under the random numbers of the direction kernel,
 // 1 / |det J| by central differences, is T_M(x -> y) of manifold_perturbation.h: the reported canonical density
 // times measureConversion() (rho of each ideal specular sub-chain, and the offset Jacobian), over the strategy's
 // probability.
+//
+// Through media the sampler also has to cross the traced edges (free-flight survival, the walk's own edge
+// densities), which the Jacobian does not see; T holds them, and rho the sensor walk's densities of the ideal
+// sub-chains' edges (manifold_perturbation.h), so both come out of the comparison: walkedOverSensor(). In
+// glass-egg (a g = 0.8 medium in glass) medium vertices join the chains (§6.7), more often with a larger
+// classification angle dtheta (20 degrees there).
 class ManifoldChains : public ::testing::TestWithParam<std::string> {};
+
+// The walk's probability of crossing the edges it traced from `from` to `to` (those into a medium vertex of a
+// chain are placed, not traced), over the sensor walk's densities of the edges of ideal sub-chains.
+double walkedOverSensor(const PathView &y, int from, int to) {
+    const int dir = to > from ? 1 : -1;
+    const int mode = modeIndex(dir > 0 ? TransportMode::Importance : TransportMode::Radiance);
+    double ratio = 1.0;
+    for (int u = from; u != to;) {
+        int w = u + dir;
+        while (w != to && !isNonSpecular(y.vertex(w))) w += dir;
+        for (int e = u; e != w; e += dir) {
+            const PathEdge &edge = y.edge(std::min(e, e + dir));
+            const bool held = e + dir == w && w != to && y.vertex(w).type == VertexType::Medium;
+            ratio *= (held ? 1.0 : edge.pdf[mode]) /
+                     (std::abs(w - u) > 1 ? edge.pdf[modeIndex(TransportMode::Radiance)] : 1.0);
+        }
+        u = w;
+    }
+    return ratio;
+}
 
 TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
     auto scene = testScene(GetParam());
-    const ManifoldPerturbation mutation(*scene, 50.0, kGlossyAngle);
+    const bool media = GetParam().rfind("glass-egg", 0) == 0;
+    const ManifoldPerturbation mutation(*scene, 50.0, media ? 20 * kGlossyAngle : kGlossyAngle);
     const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
-    int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, outliers = 0;
+    int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, mediumChains = 0, outliers = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 80; ++i) {
         const MutablePath &x = paths[i];
@@ -468,8 +548,10 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
             const ManifoldPerturbation::Strategy st{source, moving, fixed};
             const double strategy =
                 mutation.classificationProbability(x, st) / static_cast<double>(mutation.sources(x).size());
+            double crossed = walkedOverSensor(y, source, moving);
+            if (specular2) crossed *= walkedOverSensor(y, fixed, moving);
             const double manifold =
-                mutation.density(*scene, x, y, record) / strategy * mutation.measureConversion(y, st);
+                mutation.density(*scene, x, y, record) / strategy * mutation.measureConversion(y, st) / crossed;
             const double relative = std::abs(manifold * det - 1);
             worst = std::max(worst, relative);
             ++checked;
@@ -477,7 +559,7 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
             secondChain += specular2;
             for (int v = std::min(source, fixed) + 1; v < std::max(source, fixed); ++v)
                 if (v != moving && isNonSpecular(y.vertex(v))) {
-                    ++glossy;
+                    ++(y.vertex(v).type == VertexType::Medium ? mediumChains : glossy);
                     break;
                 }
             // Rays leave surfaces from offset origins (Scene::spawnRay), which the sampler sees and the
@@ -492,19 +574,22 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
         }
     }
     std::printf(
-        "%s manifold: %d proposals across chains (%d first, %d second, %d with glossy vertices walked as "
-        "specular), worst %.2g, %d above 2e-3\n",
-        GetParam().c_str(), checked, firstChain, secondChain, glossy, worst, outliers);
+        "%s manifold: %d proposals across chains (%d first, %d second, %d with glossy and %d with medium vertices "
+        "walked as specular), worst %.2g, %d above 2e-3\n",
+        GetParam().c_str(), checked, firstChain, secondChain, glossy, mediumChains, worst, outliers);
     EXPECT_GE(checked, 20) << "too few proposals checked";
     EXPECT_LE(outliers, checked / 20) << "more than 5% of the proposals are off by more than 2e-3";
     if (GetParam().rfind("glossy-spheres", 0) == 0) {
         EXPECT_GE(glossy, 20) << "too few glossy chains checked";
     }
+    if (media) {
+        EXPECT_GE(mediumChains, 20) << "too few medium chains checked";
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, ManifoldChains,
                          ::testing::Values("ring-caustic", "pool", "pool-underwater", "torus", "glossy-spheres",
-                                           "glossy-spheres-analytic"),
+                                           "glossy-spheres-analytic", "glass-egg-largelight"),
                          [](const ::testing::TestParamInfo<std::string> &info) {
                              std::string name = info.param;
                              for (char &ch : name)

@@ -80,13 +80,15 @@ TEST_P(SingleMutationBursts, AgreeWithBDPT) {
 
 // Each mutation alone: the bidirectional and lens subpath mutations and the lens and caustic perturbations
 // on diffuse paths, the caustic perturbation through glass and water (Dirac refractions, whose densities
-// are converted to the canonical measure), and the multi-chain perturbation in the pool.
+// are converted to the canonical measure), the multi-chain perturbation in the pool, and the medium-distance
+// perturbation in volumetric-caustic's fog.
 INSTANTIATE_TEST_SUITE_P(
     Scenes, SingleMutationBursts,
     ::testing::Values(Case{"cornell-box", MutationType::Bidirectional}, Case{"cornell-box", MutationType::LensSubpath},
                       Case{"cornell-box", MutationType::Lens}, Case{"cornell-box", MutationType::Caustic},
                       Case{"veach-bidir", MutationType::Caustic}, Case{"pool", MutationType::MultiChain},
-                      Case{"pool-underwater", MutationType::Caustic}),
+                      Case{"pool-underwater", MutationType::Caustic},
+                      Case{"volumetric-caustic", MutationType::MediumDistance}),
     [](const auto &info) { return gtestName(info.param.scene + "_" + mutationName(info.param.type)); });
 
 // §5.3, Cline's bookkeeping: a seed of weight w starts floor(nu + U) chains, nu = c w / W (capped at

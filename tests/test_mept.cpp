@@ -155,13 +155,17 @@ TEST(ManifoldExploration, IntegratorsAndParameters) {
         EXPECT_EQ(integrator->name(), type);
         return list;
     };
-    EXPECT_EQ(names("mept", {}), (std::vector<std::string>{"manifold", "none"}));
-    EXPECT_EQ(names("memlt", {}), (std::vector<std::string>{"bidirectional", "manifold", "none"}));
+    // The medium-distance perturbation comes with the manifold perturbation (it applies to paths through media).
+    EXPECT_EQ(names("mept", {}), (std::vector<std::string>{"manifold", "mediumDistance", "none"}));
+    EXPECT_EQ(names("memlt", {}), (std::vector<std::string>{"bidirectional", "manifold", "mediumDistance", "none"}));
+    EXPECT_EQ(names("mept", {{"mediumDistancePerturbation", "false"}}), (std::vector<std::string>{"manifold", "none"}));
     // Reachable through Mitsuba's parameters on erpt and mlt too.
     EXPECT_EQ(names("erpt", {{"manifoldPerturbation", "true"}, {"lensPerturbation", "false"}}),
-              (std::vector<std::string>{"caustic", "multiChain", "manifold", "none"}));
+              (std::vector<std::string>{"caustic", "multiChain", "manifold", "mediumDistance", "none"}));
     EXPECT_EQ(names("mlt", {{"manifoldPerturbation", "true"}, {"lensSubpathMutation", "false"}}),
-              (std::vector<std::string>{"bidirectional", "lens", "caustic", "multiChain", "manifold", "none"}));
+              (std::vector<std::string>{"bidirectional", "lens", "caustic", "multiChain", "manifold", "mediumDistance",
+                                        "none"}));
+    EXPECT_EQ(names("erpt", {}), (std::vector<std::string>{"lens", "caustic", "multiChain", "none"}));
     EXPECT_NO_THROW(makeTestIntegrator(*scene, "mept", {{"lambda", "90.0"}, {"probFactor", "90.0"}}));
     EXPECT_NO_THROW(makeTestIntegrator(*scene, "mept", {{"lambda", "auto"}}));
     for (const std::string type : {"mept", "memlt"}) {
@@ -202,6 +206,34 @@ TEST(ManifoldExploration, WalkStatistics) {
     EXPECT_GE(value("manifoldChainVerticesMax"), 1);
     EXPECT_LT(value("manifoldNonReversible"), 0.05 * value("manifoldReverseWalks") + 1);
     EXPECT_GT(counts[0].accepted, counts[0].proposed / 10);
+}
+
+// Medium vertices join chains in glass-egg's forward-scattering medium (§6.7) and are counted (Table 1), and
+// mediumChains = false keeps them out.
+TEST(ManifoldExploration, MediumVerticesInChains) {
+    auto scene = loadMLTTestScene("glass-egg", 16, 8);
+    for (const bool on : {true, false}) {
+        const auto integrator = makeTestIntegrator(*scene, "mept",
+                                                   {{"directSamples", "-1"},
+                                                    {"chainLength", "50"},
+                                                    {"maxDepth", "6"},
+                                                    {"mediumChains", on ? "true" : "false"},
+                                                    {"mediumDistancePerturbation", "false"}});
+        auto [counts, counters] = chainStatistics(*scene, *integrator, 8);
+        const double media = counter(counters, "manifoldMediumVertices").value,
+                     walks = counter(counters, "manifoldWalks").value;
+        std::printf(
+            "glass-egg mept, mediumChains %s: %.0f proposals, %.0f accepted, %.0f walks, %.0f medium vertices "
+            "walked in chains\n",
+            on ? "on" : "off", static_cast<double>(counts[0].proposed), static_cast<double>(counts[0].accepted), walks,
+            media);
+        if (on) {
+            EXPECT_GT(media, 20);
+            EXPECT_GT(counts[0].accepted, counts[0].proposed / 10);
+        } else {
+            EXPECT_EQ(media, 0);
+        }
+    }
 }
 
 }  // namespace

@@ -60,7 +60,8 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
     std::string xml = name == "pool" ? poolScene("0, 4, 3") : poolScene("0.3, 0.8, 0.4");
     // Variants of a shipped scene: "<scene>-analytic" has its sphere meshes replaced by analytic spheres (the
     // same geometry), "<scene>-thinlens" its perspective camera by a thin lens (aperture radius 0.1, focused
-    // at 6, for the endpoint position perturbation on the aperture).
+    // at 6, for the endpoint position perturbation on the aperture), "<scene>-largelight" (glass-egg) its light 5
+    // times as wide, so that BDPT, the reference, finds the light seen through the egg often enough.
     struct Variant {
         std::string suffix, pattern, replacement;
     };
@@ -68,7 +69,9 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
         {"-analytic", R"(<shape type="obj">\s*<string name="filename" value="models/sphere.obj"\s*/>)",
          R"(<shape type="sphere">)"},
         {"-thinlens", R"(<sensor type="perspective"\s*>)",
-         R"(<sensor type="thinlens"><float name="apertureRadius" value="0.1"/><float name="focusDistance" value="6"/>)"}};
+         R"(<sensor type="thinlens"><float name="apertureRadius" value="0.1"/><float name="focusDistance" value="6"/>)"},
+        {"-largelight", R"(<default name="lightScale" value="0.1"\s*/>)",
+         R"(<default name="lightScale" value="0.5"/>)"}};
     std::string base = name;
     const Variant *variant = nullptr;
     for (const Variant &v : variants)

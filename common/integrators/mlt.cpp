@@ -8,6 +8,7 @@
 #include "path/lens_perturbation.h"
 #include "path/lens_subpath_mutation.h"
 #include "path/manifold_perturbation.h"
+#include "path/medium_distance_perturbation.h"
 #include "path/multichain_perturbation.h"
 #include "scene/scene.h"
 
@@ -16,9 +17,9 @@ namespace pf {
 namespace {
 
 // The parameter that enables each mutation type, in MutationType order.
-constexpr const char *kMutationParameters[kMutationTypes] = {"bidirectionalMutation",  "lensSubpathMutation",
-                                                             "lensPerturbation",       "causticPerturbation",
-                                                             "multiChainPerturbation", "manifoldPerturbation"};
+constexpr const char *kMutationParameters[kMutationTypes] = {
+    "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",          "causticPerturbation",
+    "multiChainPerturbation", "manifoldPerturbation", "mediumDistancePerturbation"};
 
 // The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
 // since a path lands wherever it meets the film.
@@ -38,7 +39,11 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     directSamples_ = props.getInt("directSamples", 16);
     for (int k = 0; k < kMutationTypes; ++k) {
         const auto type = static_cast<MutationType>(k);
-        const bool byDefault = std::find(defaults.begin(), defaults.end(), type) != defaults.end();
+        // The medium-distance perturbation belongs to manifold exploration (its chains hold medium distances):
+        // on by default wherever the manifold perturbation is (it applies to paths with medium vertices only).
+        const bool byDefault = type == MutationType::MediumDistance
+                                   ? usesManifoldPerturbation()
+                                   : std::find(defaults.begin(), defaults.end(), type) != defaults.end();
         if (props.getBool(mutationParameter(type), byDefault)) types_.push_back(type);
     }
     // Mitsuba reads the manifold perturbation's jump size as probFactor, defaulting to lambda; either may
@@ -56,6 +61,7 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
+    mediumChains_ = props.getBool("mediumChains", true);
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -94,7 +100,11 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
             case MutationType::Manifold:
-                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_));
+                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_,
+                                                               mediumChains_));
+                break;
+            case MutationType::MediumDistance:
+                set.add(std::make_unique<MediumDistancePerturbation>());
                 break;
         }
     return set;

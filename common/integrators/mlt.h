@@ -20,6 +20,9 @@
 //   manifoldGlossyAngle (1)        dtheta of the manifold perturbation's glossy classification, in degrees:
 //                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
 //                                  value); 0 leaves every glossy vertex non-specular
+//   mediumChains (true)            whether medium vertices may join the manifold perturbation's chains (§6.7),
+//                                  classified with the same angle against their phase function's median
+//   mediumDistancePerturbation (= manifoldPerturbation)  the medium-distance perturbation
 //   twoStage (false)               rejected when true: two-stage MLT is not implemented
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
@@ -74,6 +77,7 @@ private:
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
     double lambda_ = 50, glossyAngle_ = 0;
+    bool mediumChains_ = true;
     bool lambdaAuto_ = false;
     std::vector<MutationType> types_;
 };

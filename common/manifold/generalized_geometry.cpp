@@ -7,8 +7,8 @@ namespace pf {
 namespace {
 
 // D of §1.1 in the chart's measure: the cosine between the chart's normal and the edge for vertices on a
-// surface or on the virtual plane; 1 for points, and for medium endpoints and FixedDirection vertices, whose
-// charts are perpendicular to the edge already.
+// surface or on the virtual plane; 1 for points, and for medium vertices (endpoints or in a chain) and
+// FixedDirection vertices, whose charts are perpendicular to the edge already.
 double chartCosine(const ManifoldVertex &v, const Vec3 &d) {
     return v.type == ManifoldVertexType::Surface || v.type == ManifoldVertexType::VirtualPlane ? absDot(v.ng, d) : 1.0;
 }
@@ -47,8 +47,7 @@ std::optional<double> generalizedGeometry(const std::vector<ManifoldVertex> &cha
     ChainJacobian jacobian;
     if (!jacobian.build(chain)) return std::nullopt;
     // P_first A^{-1} B_k: how the first unknown's chart moves with x_k (T_S up to sign).
-    const Mat2 map = jacobian.a.inverseColumn(jacobian.a.size() - 1)[0] * jacobian.bLast;
-    const double det = std::abs(map.determinant());
+    const double det = std::abs(jacobian.firstFromLast.determinant());
     // A FixedDirection x_0 is itself the first unknown: the determinant is already the ratio of area on its
     // plane ⟂ d (the beam's measure) to area at x_k.
     if (jacobian.unknowns[0] == 0) return det;

@@ -32,7 +32,8 @@ struct TangentSpace {
     std::vector<Mat2> wrtFirst, wrtLast;
 };
 
-// T_S from a built ChainJacobian.
+// T_S from a built ChainJacobian of a chain without medium vertices (empty for the dense system of a chain
+// with medium vertices, chain_jacobian.h).
 TangentSpace tangentSpace(const ChainJacobian &jacobian);
 
 // The ordinary geometry term between two chain vertices, in the measures of the charts: |cos| at each end
@@ -44,7 +45,9 @@ double geometryTerm(const ManifoldVertex &a, const ManifoldVertex &b);
 // with unconstrained ends. A FixedDirection end may be either one: its measure is the beam's cross-section, and
 // the chain is reversed internally (reversedChain()) when it is the last, which gives the same value (a parallel
 // beam's cross-section per unit area at the other end). Equal to geometryTerm() for k = 2. nullopt when the
-// chain is degenerate or A is singular.
+// chain is degenerate or A is singular. Through medium vertices (§6.7) the chain is the set of paths with their
+// offsets and segment lengths held: G is then the projected solid angle at x_0 per unit area at x_{k-1} among
+// those paths.
 std::optional<double> generalizedGeometry(const std::vector<ManifoldVertex> &chain);
 
 }  // namespace pf

@@ -97,6 +97,31 @@ ManifoldVertex ManifoldVertex::fixedDirection(const Vec3 &p, const Vec3 &d) {
     return v;
 }
 
+std::optional<ManifoldVertex> ManifoldVertex::medium(const Vec3 &p, const Vec3 &prev, const Vec3 &next) {
+    ManifoldVertex v;
+    v.type = ManifoldVertexType::Medium;
+    v.scattering = Scattering::Medium;
+    v.glossy = true;
+    v.p = p;
+    v.segment = (p - prev).length();
+    if (!(v.segment > 0.0) || !std::isfinite(v.segment) || !v.setIncoming((p - prev) / v.segment)) return std::nullopt;
+    const std::optional<Vec2> c = constraintValue(fixedPosition(prev), v, fixedPosition(next));
+    if (!c) return std::nullopt;
+    v.offset = *c;
+    v.halfVectorAbove = dot(next - p, v.n) > 0;
+    return v;
+}
+
+bool ManifoldVertex::setIncoming(const Vec3 &w) {
+    const std::optional<std::pair<Vec3, Vec3>> frame = mediumFrame(w);
+    if (!frame) return false;
+    n = ng = w;
+    dpdu = frame->first;
+    dpdv = frame->second;
+    dndu = dndv = Vec3(0.0);
+    return true;
+}
+
 std::optional<ManifoldVertex> ManifoldVertex::mediumEndpoint(const Vec3 &p, const Vec3 &toward) {
     const Vec3 d = toward - p;
     const double len = d.length();
@@ -133,7 +158,14 @@ std::optional<ManifoldVertex> ManifoldVertex::endpoint(const PathVertex &pv, con
 
 std::vector<ManifoldVertex> reversedChain(const std::vector<ManifoldVertex> &chain) {
     std::vector<ManifoldVertex> reversed(chain.rbegin(), chain.rend());
-    for (ManifoldVertex &v : reversed) {
+    for (size_t i = 0; i < reversed.size(); ++i) {
+        ManifoldVertex &v = reversed[i];
+        if (v.type == ManifoldVertexType::Medium && i > 0 && i + 1 < reversed.size()) {
+            if (const std::optional<ManifoldVertex> m =
+                    ManifoldVertex::medium(v.p, reversed[i - 1].p, reversed[i + 1].p))
+                v = *m;
+            continue;
+        }
         if (v.scattering != Scattering::Refraction) continue;
         v.eta = 1.0 / v.eta;
         v.predecessorAbove = !v.predecessorAbove;

@@ -20,6 +20,14 @@
 //   vertex has the endpoint constraint c = T^T ω(x_1 -> x_2) = 0 of §6.1.
 // * MediumEndpoint: a non-specular endpoint inside a medium, parameterized on the plane perpendicular to the
 //   direction facing the chain (§6.7), so that its cosine factor is 1 as in the medium's geometry term.
+// * Medium: a medium interaction treated as part of a chain ([TR §7], [TH ch. 7], ALGORITHMS.md §6.7). A strongly
+//   forward-scattering phase function is a rough mirror in the scattering angle: the constraint is
+//   c = T(ω_in)^T ω_out with ω_in the direction of travel into the vertex (from its chain predecessor) and
+//   ω_out the direction towards its successor, held at the vertex's offset o (the scattering direction in the
+//   frame of the incoming one; specular_constraint.h). Its third degree of freedom is removed by holding the
+//   distance to the predecessor (`segment`) fixed. n = ng = ω_in; the chart dp/du, dp/dv is the constraint's
+//   own frame T(ω_in), orthonormal and ⟂ ω_in (the tangent plane of the sphere of radius `segment` about the
+//   predecessor), and halfVectorAbove is the sign of <ω_out, ω_in> (forward or backward scattering).
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -33,10 +41,18 @@ namespace pf {
 
 struct PathVertex;
 
-enum class ManifoldVertexType : uint8_t { Surface, VirtualPlane, FixedPosition, FixedDirection, MediumEndpoint };
+enum class ManifoldVertexType : uint8_t {
+    Surface,
+    VirtualPlane,
+    FixedPosition,
+    FixedDirection,
+    MediumEndpoint,
+    Medium
+};
 
-// How a constrained vertex scatters; None for unconstrained vertices (non-specular endpoints).
-enum class Scattering : uint8_t { None, Reflection, Refraction };
+// How a constrained vertex scatters; None for unconstrained vertices (non-specular endpoints), Medium for
+// medium vertices in a chain (phase-function scattering, §6.7).
+enum class Scattering : uint8_t { None, Reflection, Refraction, Medium };
 
 struct ManifoldVertex {
     ManifoldVertexType type = ManifoldVertexType::Surface;
@@ -62,6 +78,8 @@ struct ManifoldVertex {
     // Which side of the geometric normal the predecessor lies on (sign of <ω_i, ng>); part of the
     // configuration, since it decides eta and whether a ray hits the surface from outside or inside.
     bool predecessorAbove = true;
+    // Medium vertices: the distance to the chain predecessor, which walks and propagation hold fixed (§6.7).
+    double segment = 0.0;
 
     // The full intersection of Surface vertices, for callers that build PathVertex records from a walk's
     // result; its.shape and its.bsdf() identify the vertex's configuration.
@@ -89,6 +107,12 @@ struct ManifoldVertex {
     static ManifoldVertex fixedPosition(const Vec3 &p);
     // A directional endpoint at p whose edge towards the chain has the fixed unit direction d.
     static ManifoldVertex fixedDirection(const Vec3 &p, const Vec3 &d);
+    // A medium vertex in a chain at p between neighbours at prev and next (chain order), with its current
+    // offset and segment length (§6.7). nullopt when a neighbour coincides with p or the frame is degenerate.
+    static std::optional<ManifoldVertex> medium(const Vec3 &p, const Vec3 &prev, const Vec3 &next);
+    // A medium vertex's incoming direction w (unit): n = ng = w and the chart T(w). False where the frame is
+    // degenerate.
+    bool setIncoming(const Vec3 &w);
     // A non-specular medium endpoint at p whose chain neighbour lies at `toward`.
     static std::optional<ManifoldVertex> mediumEndpoint(const Vec3 &p, const Vec3 &toward);
     // A non-specular endpoint from a path-space vertex: surfaces and area-light or aperture positions become
@@ -99,7 +123,8 @@ struct ManifoldVertex {
 
 // The chain listed the other way round. The constrained vertices' eta and predecessorAbove are relative to chain
 // order, so a refraction's eta becomes 1 / eta and its predecessor's side flips; the half-vector
-// γ(ω_i + eta ω_o) keeps its direction (γ(ω_o + ω_i / eta) is parallel to it), and with it the offset.
+// γ(ω_i + eta ω_o) keeps its direction (γ(ω_o + ω_i / eta) is parallel to it), and with it the offset. A medium
+// vertex's frame, offset and segment are relative to its predecessor, so it is rebuilt from its new neighbours.
 std::vector<ManifoldVertex> reversedChain(const std::vector<ManifoldVertex> &chain);
 
 // The symmetric virtual plane of WalkManifold (§6.4, [TR §4]) through the current endpoint position p (normal

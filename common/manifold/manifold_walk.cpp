@@ -49,6 +49,19 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
     }
     for (size_t i = 1; i + 1 < k; ++i) {
         const ManifoldVertex &old = chain[i];
+        if (old.type == ManifoldVertexType::Medium) {
+            // [TR §7.1]: x'_i = x_{i-1} + |x_{i-1} - x_i| d, in the same medium (no surface on the way), then the
+            // offset becomes the outgoing direction in the frame of the new incoming one.
+            if (scene_.occluded(Ray(rayOrigin, dir, scene_.epsilonAt(rayOrigin), old.segment))) return std::nullopt;
+            ManifoldVertex v = old;
+            v.p = rayOrigin + dir * old.segment;
+            const std::optional<Vec3> wo = v.setIncoming(dir) ? microfacetNormal(v) : std::nullopt;
+            if (!wo) return std::nullopt;
+            out[i] = v;
+            rayOrigin = v.p;
+            dir = normalize(*wo);
+            continue;
+        }
         Intersection its;
         if (!scene_.intersect(chainRay(scene_, rayOrigin, dir), its)) return std::nullopt;
         const Vec3 wi = -dir;
@@ -121,8 +134,7 @@ WalkResult ManifoldWalk::walk(const std::vector<ManifoldVertex> &chain, const Ma
         const ManifoldVertex &end = current[k - 1];
         const Vec3 delta = target.p - end.p;
         const Vec2 endStep(dot(end.dpdu, delta), dot(end.dpdv, delta));
-        const Mat2 map = jacobian.a.inverseColumn(jacobian.a.size() - 1)[0] * jacobian.bLast;
-        const Vec2 step = map * endStep * -beta;
+        const Vec2 step = jacobian.firstFromLast * endStep * -beta;
         const ManifoldVertex &first = current[jacobian.unknowns[0]];
         const Vec3 predicted = first.p + first.dpdu * step.x + first.dpdv * step.y;
         // Corrector: project back onto the manifold by tracing from the fixed end through the prediction.

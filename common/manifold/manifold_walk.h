@@ -24,6 +24,12 @@
 // move can be undone (on TORUS's glass cube most can: forbidding facet changes lowered the share of converged
 // walks from 95% to 93% and the acceptance from 84% to 83%).
 //
+// Medium vertices (ALGORITHMS.md §6.7, [TR §7.1]): the corrector places a medium vertex at its segment length
+// from its predecessor along the propagated direction, requires that no surface lies in between (an index-matched
+// boundary too: chains do not cross them yet), and leaves it in the direction its offset gives in the frame of
+// the new incoming direction. ∇C then has the length rows of chain_jacobian.h, so the predictor is the exact
+// first-order model of the walked manifold.
+//
 // Scene scale L: the seeds use L = max_i ‖x_i‖, which depends on where the world origin is (a scene translated
 // far away would demand absurd relative accuracy). We use the diagonal of the scene's bounding box instead: a
 // length of the scene's own size, invariant under translation, and the same for every walk (so the forward and

@@ -24,9 +24,14 @@ namespace pf {
 
 // The factor for chain x_a … x_c (chain order; ends unconstrained), whose vertex `free` (an interior index)
 // is the unconstrained x_b and whose other interior vertices are constrained (free = 0: x_b is the end x_a
-// itself, as for the endpoint position perturbation, and M is the A-type matrix of the interior); `glossy` lists the interior
-// indices of the glossy ones (offset manifolds), the rest being ideal specular. 1 without glossy vertices.
+// itself, as for the endpoint position perturbation, and M is the A-type matrix of the interior); `glossy` lists the
+// interior indices of the glossy ones (offset manifolds), the rest being ideal specular. 1 without glossy vertices.
 // nullopt on a degenerate chain or a singular M (a caustic fold).
+//
+// Medium vertices (§6.7) in `glossy` are held at their offset and their segment length: the factor is then
+// |∂[x_b, x_g.., x_m..] / ∂[x_b, o_g.., (o_m, ℓ_m)..]|, in the volume measure at each medium vertex x_m, with the
+// length rows of chain_jacobian.h. The vertices before x_b were walked from x_a (as listed), those after it from
+// x_c, so a medium vertex after x_b has its frame, offset and segment relative to its successor in the list.
 std::optional<double> offsetJacobian(const std::vector<ManifoldVertex> &chain, size_t free,
                                      const std::vector<size_t> &glossy);
 

@@ -69,12 +69,78 @@ Mat2 frameBlock(const Vec3 &dHdu, const Vec3 &dHdv, const Vec3 &s, const Vec3 &t
     return {dot(dHdu, s), dot(dHdv, s), dot(dHdu, t), dot(dHdv, t)};
 }
 
-// Derivatives of a unit direction ω = γ(q - x) w.r.t. the chart of q (scale = +1/|q - x|) or of x
+// Derivative of a unit direction ω = γ(q - x) when q moves along e (scale = +1/|q - x|) or x does
 // (scale = -1/|q - x|), projected onto the frame [s t] after the normalization of h (projection along h).
+Vec2 neighbourColumn(const Vec3 &e, const Vec3 &w, double scale, const Vec3 &h, const Vec3 &s, const Vec3 &t) {
+    const Vec3 d = projectOut(projectOut(e, w) * scale, h);
+    return {dot(d, s), dot(d, t)};
+}
+
+Mat2 fromColumns(const Vec2 &u, const Vec2 &v) { return {u.x, v.x, u.y, v.y}; }
+
+// The same along both chart directions of q.
 Mat2 neighbourBlock(const ManifoldVertex &q, const Vec3 &w, double scale, const Vec3 &h, const Vec3 &s, const Vec3 &t) {
-    const Vec3 du = projectOut(projectOut(q.dpdu, w) * scale, h);
-    const Vec3 dv = projectOut(projectOut(q.dpdv, w) * scale, h);
-    return frameBlock(du, dv, s, t);
+    return fromColumns(neighbourColumn(q.dpdu, w, scale, h, s, t), neighbourColumn(q.dpdv, w, scale, h, s, t));
+}
+
+// The third coordinate of a medium vertex: its axis ω_in; zero for other vertices, which have two.
+Vec2 neighbourAxis(const ManifoldVertex &q, const Vec3 &w, double scale, const Vec3 &h, const Vec3 &s, const Vec3 &t) {
+    return q.type == ManifoldVertexType::Medium ? neighbourColumn(q.n, w, scale, h, s, t) : Vec2();
+}
+
+// The medium constraint's geometry (header): ω_in, ω_out, the inverse lengths and the frame.
+struct MediumGeometry {
+    Vec3 wIn, wOut, s, t;
+    double ilIn = 0, ilOut = 0;
+};
+
+std::optional<MediumGeometry> mediumGeometry(const ManifoldVertex &prev, const ManifoldVertex &v,
+                                             const ManifoldVertex &next) {
+    MediumGeometry g;
+    if (!unitDirection(prev.p, v.p, g.wIn, g.ilIn) || !unitDirection(v.p, next.p, g.wOut, g.ilOut)) return std::nullopt;
+    const std::optional<std::pair<Vec3, Vec3>> f = mediumFrame(g.wIn);
+    if (!f) return std::nullopt;
+    g.s = f->first;
+    g.t = f->second;
+    return g;
+}
+
+// δc of a medium vertex when ω_in turns by dIn and ω_out by dOut: the frame turns with ω_in,
+// δŝ = (I - ŝ ŝ^T) δ(a - <a, ω> ω) / |a - <a, ω> ω|, δt = δω × ŝ + ω × δŝ.
+Vec2 mediumVariation(const MediumGeometry &g, const Vec3 &dIn, const Vec3 &dOut) {
+    const double aw = dot(kFrameDirection, g.wIn);
+    const double length = (kFrameDirection - g.wIn * aw).length();
+    const Vec3 ds0 = g.wIn * -dot(kFrameDirection, dIn) - dIn * aw;
+    const Vec3 ds = (ds0 - g.s * dot(g.s, ds0)) / length;
+    const Vec3 dt = cross(dIn, g.s) + cross(g.wIn, ds);
+    return {dot(ds, g.wOut) + dot(g.s, dOut), dot(dt, g.wOut) + dot(g.t, dOut)};
+}
+
+// ∂c of a medium vertex along displacement e of its predecessor (which = -1), itself (0) or its successor (+1).
+Vec2 mediumColumn(const MediumGeometry &g, int which, const Vec3 &e) {
+    const Vec3 dIn = projectOut(e, g.wIn) * (which == 0 ? g.ilIn : which < 0 ? -g.ilIn : 0.0);
+    const Vec3 dOut = projectOut(e, g.wOut) * (which == 0 ? -g.ilOut : which > 0 ? g.ilOut : 0.0);
+    return mediumVariation(g, dIn, dOut);
+}
+
+std::optional<ConstraintDerivatives> mediumDerivatives(const ManifoldVertex &prev, const ManifoldVertex &v,
+                                                       const ManifoldVertex &next) {
+    const std::optional<MediumGeometry> g = mediumGeometry(prev, v, next);
+    if (!g) return std::nullopt;
+    ConstraintDerivatives d;
+    const auto block = [&](const ManifoldVertex &q, int which) {
+        return fromColumns(mediumColumn(*g, which, q.dpdu), mediumColumn(*g, which, q.dpdv));
+    };
+    const auto axis = [&](const ManifoldVertex &q, int which) {
+        return q.type == ManifoldVertexType::Medium ? mediumColumn(*g, which, q.n) : Vec2();
+    };
+    d.prev = block(prev, -1);
+    d.self = block(v, 0);
+    d.next = block(next, 1);
+    d.prevAxis = axis(prev, -1);
+    d.selfAxis = axis(v, 0);
+    d.nextAxis = axis(next, 1);
+    return d;
 }
 
 std::optional<ConstraintDerivatives> fixedDirectionDerivatives(const ManifoldVertex &v, const ManifoldVertex &next) {
@@ -86,10 +152,19 @@ std::optional<ConstraintDerivatives> fixedDirectionDerivatives(const ManifoldVer
     ConstraintDerivatives d;
     d.self = neighbourBlock(v, w, -il, Vec3(0.0), v.dpdu, v.dpdv);
     d.next = neighbourBlock(next, w, il, Vec3(0.0), v.dpdu, v.dpdv);
+    d.nextAxis = neighbourAxis(next, w, il, Vec3(0.0), v.dpdu, v.dpdv);
     return d;
 }
 
 }  // namespace
+
+std::optional<std::pair<Vec3, Vec3>> mediumFrame(const Vec3 &w) {
+    const Vec3 s0 = kFrameDirection - w * dot(kFrameDirection, w);
+    const double length = s0.length();
+    if (!(length > 1e-9) || !std::isfinite(length)) return std::nullopt;
+    const Vec3 s = s0 / length;
+    return std::make_pair(s, cross(w, s));
+}
 
 std::optional<Vec3> generalizedHalfVector(const ManifoldVertex &prev, const ManifoldVertex &v,
                                           const ManifoldVertex &next) {
@@ -109,6 +184,11 @@ std::optional<Vec2> constraintValue(const ManifoldVertex &prev, const ManifoldVe
         if (!unitDirection(v.p, next.p, w, il)) return std::nullopt;
         return Vec2(dot(v.dpdu, w), dot(v.dpdv, w));
     }
+    if (v.type == ManifoldVertexType::Medium) {
+        const std::optional<MediumGeometry> g = mediumGeometry(prev, v, next);
+        if (!g) return std::nullopt;
+        return Vec2(dot(g->s, g->wOut), dot(g->t, g->wOut));
+    }
     const std::optional<Vec3> h = generalizedHalfVector(prev, v, next);
     const std::optional<TangentFrame> f = tangentFrame(v);
     if (!h || !f) return std::nullopt;
@@ -121,6 +201,7 @@ std::optional<Vec2> constraintValue(const ManifoldVertex &prev, const ManifoldVe
 std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex &prev, const ManifoldVertex &v,
                                                            const ManifoldVertex &next) {
     if (v.type == ManifoldVertexType::FixedDirection) return fixedDirectionDerivatives(v, next);
+    if (v.type == ManifoldVertexType::Medium) return mediumDerivatives(prev, v, next);
     Vec3 wi, wo;
     double ili, ilo;
     if (!unitDirection(v.p, prev.p, wi, ili) || !unitDirection(v.p, next.p, wo, ilo)) return std::nullopt;
@@ -138,6 +219,8 @@ std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex 
     ConstraintDerivatives d;
     d.prev = neighbourBlock(prev, wi, si, h, s, t);
     d.next = neighbourBlock(next, wo, so, h, s, t);
+    d.prevAxis = neighbourAxis(prev, wi, si, h, s, t);
+    d.nextAxis = neighbourAxis(next, wo, so, h, s, t);
 
     // Moving x_i moves both directions: ∂ω_i/∂u = -(I - ω_i ω_i^T) dp/du / |x_{i-1} - x_i|, likewise ω_o.
     const Vec3 dHdu = projectOut(v.dpdu * -(si + so) + wi * (dot(wi, v.dpdu) * si) + wo * (dot(wo, v.dpdu) * so), h);
@@ -165,6 +248,7 @@ std::optional<Vec3> microfacetNormal(const ManifoldVertex &v) {
 }
 
 std::optional<Vec3> scatterAbout(const Vec3 &wi, const Vec3 &m, Scattering scattering, double eta) {
+    if (scattering == Scattering::Medium) return m;
     const double c = dot(wi, m);
     if (scattering == Scattering::Reflection) return m * (2.0 * c) - wi;
     // Snell's law about m oriented towards wi: the tangential part of ω_o is -ω_i's over eta, so that

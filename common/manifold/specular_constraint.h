@@ -23,12 +23,21 @@
 //   exact for the offset manifold and the walk converges quadratically. It is undefined only where n = ±a
 //   (functions below return nullopt there).
 //
+// Medium vertices (ALGORITHMS.md §6.7, [TR §7 eq. 27]): c_i = T(ω_in)^T ω_out, ω_in = γ(x_i - x_{i-1}) the
+// direction of travel into the vertex and ω_out = γ(x_{i+1} - x_i), with T(ω) = [ŝ, ω × ŝ], ŝ = γ(a - <a, ω> ω)
+// for the fixed direction a of the glossy frame above: continuous in ω, so that offsets o ≠ 0 (every medium
+// vertex has one: its scattering angle) mean the same across a walk. It depends on x_{i-1} through ω_in as well.
+// A medium vertex has three coordinates: its chart (the frame T(ω_in), ⟂ ω_in) and the axis ω_in; the
+// `*Axis` columns below are the derivatives along the axis of each neighbour that is a medium vertex, which the
+// length rows of chain_jacobian.h need.
+//
 // The derivatives are the three 2x2 blocks of ∇C in the vertex's row, with respect to the chart coordinates
 // (u, v) of x_{i-1}, x_i and x_{i+1} (the TR listing's A, B, C; the thesis listing's dpdv/dndv typo is not
 // reproduced). They assume orthonormal charts, which ManifoldVertex guarantees. The frame's choice changes
 // each row of ∇C by an invertible 2x2 factor only, so T_S and the generalized geometry term do not depend on it.
 #pragma once
 #include <optional>
+#include <utility>
 
 #include "manifold/manifold_vertex.h"
 
@@ -38,14 +47,21 @@ struct ConstraintDerivatives {
     Mat2 prev;  // ∂c_i / ∂(u, v) of x_{i-1} (sub-diagonal block)
     Mat2 self;  // ∂c_i / ∂(u, v) of x_i (diagonal block)
     Mat2 next;  // ∂c_i / ∂(u, v) of x_{i+1} (super-diagonal block)
+    // ∂c_i along the axis n (= ω_in) of x_{i-1}, x_i, x_{i+1} where that vertex is a Medium vertex; else zero.
+    Vec2 prevAxis, selfAxis, nextAxis;
 };
+
+// The constraint frame T(ω) = [ŝ, ω × ŝ] of a medium vertex whose incoming direction is the unit vector ω;
+// nullopt where ω is parallel to the frame's fixed direction.
+std::optional<std::pair<Vec3, Vec3>> mediumFrame(const Vec3 &w);
 
 // The generalized half-vector h_i = γ(ω_i + eta ω_o) of a constrained Surface vertex; nullopt when
 // ω_i + eta ω_o vanishes (index-matched refraction, or a neighbour at the vertex).
 std::optional<Vec3> generalizedHalfVector(const ManifoldVertex &prev, const ManifoldVertex &v,
                                           const ManifoldVertex &next);
 
-// c_i (the constraint value, compare with v.offset) of a constrained vertex (Surface or FixedDirection).
+// c_i (the constraint value, compare with v.offset) of a constrained vertex (Surface, Medium or FixedDirection),
+// from the positions alone (a Medium vertex's frame is rebuilt from prev and v).
 // For a FixedDirection vertex, prev is ignored and next is x_2. nullopt on degenerate geometry.
 std::optional<Vec2> constraintValue(const ManifoldVertex &prev, const ManifoldVertex &v, const ManifoldVertex &next);
 
@@ -61,7 +77,8 @@ std::optional<ConstraintDerivatives> constraintDerivatives(const ManifoldVertex 
 std::optional<Vec3> microfacetNormal(const ManifoldVertex &v);
 
 // Scatters the unit direction wi (pointing from the vertex towards where the light came from) about the unit
-// normal m: reflection, or refraction with relative index eta = eta_o / eta_i (h ∝ wi + eta wo as above).
+// normal m: reflection, or refraction with relative index eta = eta_o / eta_i (h ∝ wi + eta wo as above);
+// at a Medium vertex m is the outgoing direction itself (microfacetNormal() of a medium vertex is T o ± ... ω_in).
 // nullopt on total internal reflection.
 std::optional<Vec3> scatterAbout(const Vec3 &wi, const Vec3 &m, Scattering scattering, double eta);
 

@@ -9,6 +9,7 @@
 #include "manifold/offset_jacobian.h"
 #include "manifold/roughness.h"
 #include "path/perturbation.h"
+#include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -43,9 +44,11 @@ std::optional<std::vector<ManifoldVertex>> manifoldChain(const PathView &p, int 
     chain.push_back(*first);
     for (int i = from + dir; i != to; i += dir) {
         const PathVertex &v = p.vertex(i);
+        const Vec3 &prev = p.vertex(i - dir).position(), &next = p.vertex(i + dir).position();
         const auto mv = i == free ? ManifoldVertex::surface(v.its)
-                                  : ManifoldVertex::constrained(v.its, p.vertex(i - dir).position(),
-                                                                p.vertex(i + dir).position(), !isNonSpecular(v));
+                        : v.type == VertexType::Medium
+                            ? ManifoldVertex::medium(v.position(), prev, next)
+                            : ManifoldVertex::constrained(v.its, prev, next, !isNonSpecular(v));
         if (!mv) return std::nullopt;
         chain.push_back(*mv);
     }
@@ -61,6 +64,13 @@ int nextSmooth(const PathView &x, int cur, int end) {
     int next = cur + dir;
     while (next != end && !isNonSpecular(x.vertex(next))) next += dir;
     return next;
+}
+
+// The held segment of chain vertex `v` of x reached from direction dir (§6.7): its distance to its predecessor
+// when it is a medium vertex of the chain, 0 otherwise (the propagation then ends as the walk samples it).
+double heldSegment(const PathView &x, int v, int dir, int moving) {
+    if (v == moving || x.vertex(v).type != VertexType::Medium) return 0.0;
+    return (x.vertex(v).position() - x.vertex(v - dir).position()).length();
 }
 
 bool onFilm(const Film &film, const Vec2 &raster) {
@@ -125,8 +135,8 @@ Vec3 rayDirectionTo(const Scene &scene, const PathVertex &from, const Vec3 &p) {
 
 }  // namespace
 
-ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle)
-    : lambda_(lambda), glossyAngle_(glossyAngle), walk_(scene) {}
+ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains)
+    : lambda_(lambda), glossyAngle_(glossyAngle), mediumChains_(mediumChains), walk_(scene) {}
 
 // rho = G(u <-> ... <-> l) / (|cos_u| J(u -> l)) of y's chain between `end` and `moving` (header). G is
 // taken over the chain listed from u: generalizedGeometry(x_1 .. x_k) is the Jacobian of projected solid angle
@@ -147,18 +157,28 @@ double ManifoldPerturbation::measureRatio(const PathView &y, int end, int moving
     return g && denominator > 0 ? *g / denominator : 0.0;
 }
 
-// The single edges are traced from `from` (the walk's mode), those of the ideal sub-chains are inside rho;
-// 0 when degenerate.
+// The edges are traced from `from` (the walk's mode); rho converts the ideal sub-chains' measure; 0 when
+// degenerate.
 double ManifoldPerturbation::toCanonical(const PathView &y, int from, int moving) {
-    const int mode = modeIndex(walkMode(moving > from ? 1 : -1));
+    const int dir = moving > from ? 1 : -1, mode = modeIndex(walkMode(dir));
     double factor = 1.0;
     for (int u = from; u != moving && factor > 0;) {
         const int w = nextSmooth(y, u, moving);
+        // The walk's own probability of crossing each traced edge (free-flight survival), except that an edge
+        // into a medium vertex of the chain is placed at its held length, not sampled (§6.7); rho holds the
+        // sensor walk's densities instead, which differ from these at medium ends.
+        const bool held = heldSegment(y, w, dir, moving) > 0;
+        double walked = 1.0, sensor = 1.0;
+        for (int e = u; e != w; e += dir) {
+            const PathEdge &edge = y.edge(std::min(e, e + dir));
+            if (!held || e + dir != w) walked *= edge.pdf[mode];
+            sensor *= edge.pdf[modeIndex(TransportMode::Radiance)];
+        }
         if (std::abs(w - u) > 1) {
             const double rho = measureRatio(y, u, w);
-            factor = rho > 0 ? factor / rho : 0.0;
+            factor = rho > 0 && sensor > 0 ? factor / rho * (walked / sensor) : 0.0;
         } else {
-            factor *= y.edge(std::min(u, w)).pdf[mode];
+            factor *= walked;
         }
         u = w;
     }
@@ -194,7 +214,13 @@ double ManifoldPerturbation::measureConversion(const PathView &y, const Strategy
 
 double ManifoldPerturbation::chainProbability(const PathVertex &v) const {
     if (!isNonSpecular(v)) return 1.0;
-    if (!(glossyAngle_ > 0) || v.type != VertexType::Surface) return 0.0;
+    if (!(glossyAngle_ > 0)) return 0.0;
+    // A medium vertex: the Henyey-Greenstein median scattering angle against dtheta ([TR A1], §6.6).
+    if (v.type == VertexType::Medium)
+        return mediumChains_ && v.medium
+                   ? specularProbability(hgQuantileAngle(v.medium->phase().meanCosine()), glossyAngle_)
+                   : 0.0;
+    if (v.type != VertexType::Surface) return 0.0;
     const BSDF *bsdf = v.its.bsdf();
     if (!(bsdf->flags() & BSDFFlags::Glossy) || (bsdf->flags() & BSDFFlags::Diffuse)) return 0.0;
     return 1 - nonSpecularProbabilitySurface(bsdf->roughness(v.its, BSDFFlags::Glossy), glossyAngle_);
@@ -331,13 +357,15 @@ bool ManifoldPerturbation::propagateChain(const Scene &scene, Sampler &sampler, 
     const auto chain = manifoldChain(x, st.source, st.moving);
     if (!chain) return false;
     for (int cur = st.source;;) {
-        // Through the Dirac lobes up to the next glossy vertex or x_b.
+        // Through the Dirac lobes up to the next glossy or medium vertex (at its held segment) or x_b.
         const int next = nextSmooth(x, cur, st.moving);
-        if (!propagate(scene, sampler, walkMode(dir), x, y, cur, next, d)) return false;
+        if (!propagate(scene, sampler, walkMode(dir), x, y, cur, next, d, heldSegment(x, next, dir, st.moving)))
+            return false;
         if (next == st.moving) return true;
         // A glossy vertex: scatter about the microfacet normal of x's offset (§6.6), as the walk's corrector
-        // does, from the predecessor's position, so that y's offset is x's.
-        stats_.glossySpecular += 1;
+        // does, from the predecessor's position, so that y's offset is x's; a medium vertex: leave in the
+        // direction of x's offset in the frame of the new incoming direction (§6.7).
+        countChainVertex(x.vertex(next));
         const size_t i = static_cast<size_t>(std::abs(next - st.source));
         const Vec3 &from = y.vertex(next - dir).position(), &at = y.vertex(next).position();
         const auto traced = walk_.propagate({ManifoldVertex::fixedPosition(from), (*chain)[i], (*chain)[i + 1]}, from,
@@ -374,12 +402,12 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     for (int cur = st.fixed;;) {
         const int next = nextSmooth(x, cur, st.moving);
         const size_t i = static_cast<size_t>(std::abs(next - st.fixed));
-        if (!propagate(scene, sampler, walkMode(dir), x, traced, cur, next, d) ||
+        if (!propagate(scene, sampler, walkMode(dir), x, traced, cur, next, d, heldSegment(x, next, dir, st.moving)) ||
             (traced.vertex(next).position() - walked.chain[i].p).length() >
                 kRayOffsets * scene.epsilonAt(walked.chain[i].p))
             return false;
         if (next == st.moving) break;
-        stats_.glossySpecular += 1;
+        countChainVertex(x.vertex(next));
         d = rayDirectionTo(scene, traced.vertex(next), walked.chain[i + 1].p);
         cur = next;
     }
@@ -459,6 +487,10 @@ double ManifoldPerturbation::density(const Scene &scene, const PathView &x, cons
     return j > 0 ? strategy * lobe * first * second / j : 0.0;
 }
 
+void ManifoldPerturbation::countChainVertex(const PathVertex &v) const {
+    (v.type == VertexType::Medium ? stats_.mediumVertices : stats_.glossySpecular) += 1;
+}
+
 void ManifoldPerturbation::addCounters(ChainCounters &counters) const {
     counter(counters, "manifoldWalks").value += stats_.walks;
     counter(counters, "manifoldWalksConverged").value += stats_.converged;
@@ -469,6 +501,7 @@ void ManifoldPerturbation::addCounters(ChainCounters &counters) const {
     counter(counters, "manifoldReverseWalks").value += stats_.reverseWalks;
     counter(counters, "manifoldNonReversible").value += stats_.nonReversible;
     counter(counters, "manifoldGlossySpecular").value += stats_.glossySpecular;
+    counter(counters, "manifoldMediumVertices").value += stats_.mediumVertices;
 }
 
 }  // namespace pf

@@ -9,7 +9,7 @@
 //
 // Classification (§6.6, [TR A1] with the erratum). A glossy vertex (a microfacet conductor or dielectric; see
 // chainProbability()) joins a chain with probability psi_spec = 1 - P_nonspec(theta_q(alpha), dtheta), ideal
-// specular vertices always, and the others (diffuse, rough plastic, endpoints, medium vertices) never.
+// specular vertices always, medium vertices as below, and the others (diffuse, rough plastic, endpoints) never.
 // Rough plastic stays out: its diffuse base scatters everywhere, and a psi of its specular lobe alone would
 // treat a mostly diffuse vertex as specular. Glossy vertices on meshes and on analytic shapes alike: their
 // offsets are measured in a tangent frame that depends on the shading normal alone, whose turn ∇C models
@@ -61,8 +61,19 @@
 // (perturbation.h), which density() uses there: the same number, but without G's ill-conditioning near a
 // caustic fold (both agree to 1e-5 on the test scenes away from folds).
 //
-// Media: T_M also has the free-flight probabilities of the traced edges (propagationJacobian() counts them);
-// rho holds those of the ideal sub-chains, density() multiplies in those of the single edges.
+// Media: T_M also has the free-flight probabilities with which the traced edges were crossed (the walk's own
+// edge densities; rho, built from the sensor walk's, is corrected to them where a medium vertex ends a
+// sub-chain).
+//
+// Medium vertices in chains (§6.7, [TR §7]): a medium vertex joins a chain with probability
+// psi_spec = 1 - P_nonspec(theta_q(g), dtheta), theta_q the median scattering angle of its Henyey-Greenstein phase
+// function (g = its mean cosine) and dtheta the same `manifoldGlossyAngle` as for surfaces (Jakob measures a mean
+// change of scattering angle in a pilot instead), unless `mediumChains` is false. It keeps its offset (the
+// scattering direction in the frame of the incoming one) and its distance to its predecessor in the direction
+// of the walk: propagation and the traced second chain place it at that held distance (placeHeld(), no
+// free-flight sampling, so its incoming edge has no free-flight probability in T), and the walk holds it too.
+// T then carries J with (o, ℓ) as held coordinates of each medium vertex, in the volume measure
+// (manifold/offset_jacobian.h), and G_o through medium vertices (manifold/chain_jacobian.h's length rows).
 //
 // Reversibility (§6.5, mandatory): a proposal is kept only if walking the second chain back from y to x's
 // x_b converges to x's chain (its first walked vertex within a relative tolerance).
@@ -75,7 +86,7 @@
 // in x_b's plane with x_b's normal (the offset is then the area measure's own coordinate, and the kernel is
 // symmetric); on a curved light the move fails. This explores soft shadows and depth of field.
 //
-// Not done: chains through media (medium vertices are never classified as specular).
+// Not done: chains that cross index-matched boundaries (a held edge must cross no surface).
 #pragma once
 #include <vector>
 
@@ -87,9 +98,9 @@ namespace pf {
 
 class ManifoldPerturbation final : public Mutation {
 public:
-    // lambda: the jump size (§6.5); glossyAngle: dtheta of the classification in radians (0: no glossy vertex
-    // joins a chain).
-    ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle);
+    // lambda: the jump size (§6.5); glossyAngle: dtheta of the classification in radians (0: no glossy or medium
+    // vertex joins a chain); mediumChains: whether medium vertices may join chains (§6.7).
+    ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains = true);
     MutationType type() const override { return MutationType::Manifold; }
     bool applies(const PathView &x) const override;
     bool sample(const Scene &scene, Sampler &sampler, const MutablePath &x, MutablePath &y,
@@ -97,7 +108,7 @@ public:
     double density(const Scene &scene, const PathView &x, const PathView &y,
                    const MutationRecord &record) const override;
     // Table 1 (ALGORITHMS.md §5.5): walks, converged walks, Newton iterations, chain sizes, reverse walks
-    // and non-reversible proposals; and the glossy vertices that proposals walked as specular.
+    // and non-reversible proposals; and the glossy and the medium vertices that proposals walked as specular.
     void addCounters(ChainCounters &counters) const override;
 
     // A source: the vertex whose direction is perturbed and the direction of the walk (+1 towards the camera).
@@ -143,8 +154,10 @@ private:
     // The statistics of one chain's run (a MutationSet is built per chain, so nothing is shared).
     struct Statistics {
         double walks = 0, converged = 0, iterations = 0, chainVertices = 0, maxChainVertices = 0;
-        double reverseWalks = 0, nonReversible = 0, glossySpecular = 0;
+        double reverseWalks = 0, nonReversible = 0, glossySpecular = 0, mediumVertices = 0;
     };
+    // Counts a glossy or medium vertex that a proposal walked as part of a chain (Table 1).
+    void countChainVertex(const PathVertex &v) const;
     // Classifies the vertices after the source (one number per glossy vertex); nullopt on a failed walk.
     std::optional<Strategy> classify(Sampler &sampler, const PathView &x, const Source &source) const;
     // Traces direction d from y's x_a through x's first chain (Dirac lobes kept, glossy vertices scattered
@@ -156,6 +169,7 @@ private:
                       const Strategy &st) const;
 
     double lambda_, glossyAngle_;
+    bool mediumChains_;
     ManifoldWalk walk_;
     mutable Statistics stats_;
 };

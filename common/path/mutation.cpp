@@ -67,6 +67,8 @@ const char *mutationName(MutationType type) {
             return "multiChain";
         case MutationType::Manifold:
             return "manifold";
+        case MutationType::MediumDistance:
+            return "mediumDistance";
     }
     return "";
 }

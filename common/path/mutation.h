@@ -60,10 +60,10 @@ double importanceToCanonical(const Scene &scene, const PathView &path, int i);
 // scatters through a smooth lobe, or the endpoint node it is.
 bool isNonSpecular(const PathVertex &v);
 
-// Veach's mutation and perturbation types and manifold exploration's manifold perturbation
-// (path/manifold_perturbation.h), in the order of MutationSet's counts.
-enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain, Manifold };
-constexpr int kMutationTypes = 6;
+// Veach's mutation and perturbation types, manifold exploration's manifold perturbation
+// (path/manifold_perturbation.h) and its medium-distance perturbation (path/medium_distance_perturbation.h).
+enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain, Manifold, MediumDistance };
+constexpr int kMutationTypes = 7;
 const char *mutationName(MutationType type);
 
 // What a mutation replaced: x keeps x_{-1} .. x_l and x_m .. x_n, and y has `added` new vertices between

@@ -68,14 +68,33 @@ uint32_t diracLobe(const PathVertex &v) {
 
 }  // namespace
 
+bool placeHeld(const Scene &scene, TransportMode mode, const PathVertex &from, const Vec3 &d, double held,
+               PathEdge &edge, PathVertex &succ) {
+    succ = PathVertex();
+    succ.type = VertexType::Medium;
+    succ.its.p = from.position() + d * held;
+    succ.its.wi = -d;
+    succ.medium = from.mediumToward(d);
+    succ.walkMode = mode;
+    if (!succ.medium) return false;
+    const bool up = mode == TransportMode::Importance;
+    return connect(scene, up ? from : succ, up ? succ : from, edge) && edge.crossings == 0;
+}
+
 bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const PathView &x, MutablePath &y, int from,
-               int to, Vec3 d) {
+               int to, Vec3 d, double held) {
     const int dir = to > from ? 1 : -1;
     for (int cur = from;; cur += dir) {
         const int next = cur + dir;
         const PathVertex &expected = x.vertex(next);
         PathVertex succ;
         PathEdge edge;
+        if (next == to && held > 0) {
+            if (!placeHeld(scene, mode, y.vertex(cur), d, held, edge, succ)) return false;
+            y.edge(std::min(cur, next)) = edge;
+            y.vertex(next) = succ;
+            return true;
+        }
         if (!y.vertex(cur).perturb(scene, sampler, mode, d, edge, succ) || succ.isEndpointNode()) return false;
         const bool surfaceExpected = expected.type == VertexType::Surface || expected.type == VertexType::EmitterNode;
         if ((succ.type == VertexType::Surface) != surfaceExpected) return false;

@@ -54,9 +54,16 @@ Vec3 rayDirection(const Scene &scene, const PathVertex &from, const PathVertex &
 // up; the sensor walk down), through the specular vertices that x has strictly between them, each with the
 // same kind of Dirac lobe as in x. Fills y's vertices and edges on the way, up to vertex `to`, which must be
 // a scattering vertex of the same type as x's (a surface also stands in for an emitter node at index 0, to
-// be cast by the caller). False when the configuration changes or the ray leaves the scene.
+// be cast by the caller). False when the configuration changes or the ray leaves the scene. With held > 0,
+// vertex `to` is a medium vertex of a manifold chain (ALGORITHMS.md §6.7): it is placed at distance `held` from
+// its predecessor along the propagated direction instead of by free-flight sampling, and its edge must cross no
+// surface (placeHeld()).
 bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const PathView &x, MutablePath &y, int from,
-               int to, Vec3 d);
+               int to, Vec3 d, double held = 0.0);
+// The medium vertex at distance `held` from vertex `from` along unit direction d, reached by the walk of `mode`,
+// and its edge (transmittance, densities) from `from`; false when a surface lies in between.
+bool placeHeld(const Scene &scene, TransportMode mode, const PathVertex &from, const Vec3 &d, double held,
+               PathEdge &edge, PathVertex &succ);
 
 // The factor that turns the solid-angle density of the direction leaving vertex `from` into the density
 // of vertex `to` when that direction is propagated as above: for each step, the successor's cosine over
