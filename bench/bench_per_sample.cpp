@@ -117,11 +117,16 @@ int main(int argc, char **argv) {
         } else if (a == "--threads" && hasValue)
             o.threads = std::stoi(argv[++i]);
         else if (a == "--integrators" && hasValue) {
-            o.integrators.clear();
+            o.integrators.clear();  // "" or "none": only the --image rows
             std::stringstream list(argv[++i]);
-            for (std::string name; std::getline(list, name, ',');) o.integrators.push_back(name);
+            for (std::string name; std::getline(list, name, ',');)
+                if (!name.empty() && name != "none") o.integrators.push_back(name);
         } else
             o.scene = a;
+    }
+    if (o.integrators.empty() && o.images.empty()) {
+        std::fprintf(stderr, "nothing to measure: give --integrators or --image\n");
+        return 2;
     }
     auto scene = pf::loadScene(o.scene);
     scene->resizeFilm(o.res, o.res);
@@ -185,20 +190,25 @@ int main(int argc, char **argv) {
                          o.res);
             return 2;
         }
-        const std::vector<double> e = blockErrors(blockMeans(image, o.block), refBlocks);
+        const std::vector<pf::Spectrum> means = blockMeans(image, o.block);
+        const std::vector<double> e = blockErrors(means, refBlocks);
+        if (worstErrors.empty()) {
+            worstErrors = e;
+            worstMeans = means;
+        }
         std::printf("%-8s %12.4g %12s %12.4g %12s %14s %16s\n", name.c_str(),
                     bench::relativeError(image, reference).all, "",
                     std::accumulate(e.begin(), e.end(), 0.0) / (3.0 * static_cast<double>(e.size())), "", "-", "-");
     }
 
-    // Where the first integrator's block error sits.
+    // Where the first row's block error sits.
     std::vector<size_t> order(worstErrors.size());
     std::iota(order.begin(), order.end(), size_t(0));
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return worstErrors[a] > worstErrors[b]; });
     const double total = std::accumulate(worstErrors.begin(), worstErrors.end(), 0.0);
     const int perRow = o.res / o.block;
     std::printf("%s: blocks with most of the block error (x, y in blocks; mean luminance)\n",
-                o.integrators.front().c_str());
+                o.integrators.empty() ? o.images.front().first.c_str() : o.integrators.front().c_str());
     for (int i = 0; i < std::min<int>(o.worst, static_cast<int>(order.size())); ++i) {
         const size_t b = order[static_cast<size_t>(i)];
         std::printf("  (%3d, %3d)  image %10.4g  reference %10.4g  share %5.1f%%\n", static_cast<int>(b) % perRow,

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <regex>
 #include <sstream>
 
@@ -14,12 +15,17 @@ namespace {
 
 class FarmSms : public FarmTest {};
 
-TEST_F(FarmSms, ImageTasksMatchTheEmbeddedRender) {
+// scenes/pool-caustic at 24 x 24 (in the farm's directory), with `edit` applied to its text.
+std::string poolScene(const std::string &dir, const std::function<std::string(std::string)> &edit = {}) {
     std::ifstream in(std::string(PATHFARM_SOURCE_DIR) + "/scenes/pool-caustic/scene.xml");
     std::stringstream xml;
     xml << in.rdbuf();
-    const std::string scene = writeFile(farm->dir(), "pool.xml",
-                                        std::regex_replace(xml.str(), std::regex(R"(value="256")"), R"(value="24")"));
+    const std::string small = std::regex_replace(xml.str(), std::regex(R"(value="256")"), R"(value="24")");
+    return writeFile(dir, "pool.xml", edit ? edit(small) : small);
+}
+
+TEST_F(FarmSms, ImageTasksMatchTheEmbeddedRender) {
+    const std::string scene = poolScene(farm->dir());
     const std::string spec = "--integrator sms --spp 12 --seed 5";
     const std::string ref = farm->embeddedRender(scene, spec, "reference");
     farm->startMaster(kFastLeases);
@@ -29,6 +35,21 @@ TEST_F(FarmSms, ImageTasksMatchTheEmbeddedRender) {
     ASSERT_EQ(code, 0) << output << farm->master().log();
     EXPECT_TRUE(sameBits(ref, out));
     EXPECT_EQ(readEXR(out).metadata.at("pathfarm.integrator"), "sms");
+}
+
+// A flag that sms cannot honour (a diffuse caster) is refused when the job is set up, as by the embedded
+// render, naming the file and line, and the master goes on.
+TEST_F(FarmSms, ImpossibleFlagsAreRefusedAtSubmission) {
+    const std::string scene = poolScene(farm->dir(), [](std::string xml) {
+        const size_t diffuse = xml.find(R"(<bsdf type="diffuse">)");
+        return xml.insert(diffuse, R"(<boolean name="causticCaster" value="true"/>)");
+    });
+    farm->startMaster();
+    const auto [code, output] = farm->cli("submit " + scene + " --integrator sms --spp 1");
+    EXPECT_NE(code, 0) << output;
+    EXPECT_NE(output.find("pool.xml:"), std::string::npos) << output;
+    EXPECT_NE(output.find("causticCaster"), std::string::npos) << output;
+    EXPECT_TRUE(farm->master().running());
 }
 
 }  // namespace

@@ -342,7 +342,8 @@ TEST(SmsGeometry, MatchesTracedBundleAndImageMethod) {
 // the flat-interface formula E(r) = I T(θi) sin θi / (r (h / cos²θi + d cos θi / (η cos³θt))).
 MeanCI estimateAt(const Scene &scene, const Intersection &x1, const Properties &props, int n) {
     const SmsConnection sms(props);
-    sms.begin(scene);
+    sms.check(scene);
+    sms.begin();
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
         IndependentSampler sampler(17, static_cast<uint64_t>(i), 0);

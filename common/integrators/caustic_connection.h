@@ -28,8 +28,10 @@ struct Intersection;
 class CausticConnection {
 public:
     virtual ~CausticConnection() = default;
-    // Before a render: checks the scene's flags (throws SceneError) and resets the statistics.
-    virtual void begin(const Scene &scene) const = 0;
+    // The scene's flags (throws SceneError).
+    virtual void check(const Scene &scene) const = 0;
+    // Before a render: resets the statistics.
+    virtual void begin() const = 0;
     // After a render: reports the statistics.
     virtual void end() const = 0;
     virtual bool receives(const Intersection &its) const = 0;

@@ -48,6 +48,10 @@ public:
     virtual ~Integrator() = default;
     virtual Bitmap render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const = 0;
     virtual std::string name() const = 0;
+    // What this integrator asks of the scene beyond its own parameters (e.g. sms's caustic flags), checked
+    // where the job is set up (makeIntegrator), so that the farm refuses a job the embedded render refuses.
+    // Throws SceneError.
+    virtual void checkScene(const Scene &) const {}
 };
 
 // Contributions that land on other pixels than the one being sampled (light tracing, BDPT's t = 1

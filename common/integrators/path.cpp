@@ -99,8 +99,15 @@ PathTracer::PathTracer(const Properties &props, bool media, std::shared_ptr<cons
     if (rrDepth_ < 1) props.fail("rrDepth", "must be at least 1");
 }
 
+void PathTracer::checkScene(const Scene &scene) const {
+    if (caustics_) caustics_->check(scene);
+}
+
 Bitmap PathTracer::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
-    if (caustics_) caustics_->begin(scene);
+    if (caustics_) {
+        caustics_->check(scene);
+        caustics_->begin();
+    }
     Bitmap image = SamplingIntegrator::render(scene, opt, stats);
     if (caustics_) caustics_->end();
     return image;

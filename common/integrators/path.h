@@ -13,6 +13,7 @@ class PathTracer final : public SamplingIntegrator {
 public:
     PathTracer(const Properties &props, bool media, std::shared_ptr<const CausticConnection> caustics = nullptr);
     Spectrum Li(const Scene &scene, Sampler &sampler, const Ray &ray) const override;
+    void checkScene(const Scene &scene) const override;
     Bitmap render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const override;
     std::string name() const override { return caustics_ ? "sms" : media_ ? "volpath" : "path"; }
 

@@ -57,7 +57,7 @@ SmsConnection::SmsConnection(const Properties &props) {
     if (bounces != 1) props.fail("bounces", "only one-bounce chains (1) are implemented");
 }
 
-void SmsConnection::begin(const Scene &scene) const {
+void SmsConnection::check(const Scene &scene) const {
     for (const auto &shape : scene.shapes())
         if (shape->causticCaster().value_or(false) && specularEvent(*shape) == Scattering::None)
             throw SceneError(shape->location(),
@@ -65,8 +65,9 @@ void SmsConnection::begin(const Scene &scene) const {
     for (const auto &emitter : scene.emitters())
         if (emitter->causticEmitter().value_or(false) && !hasPosition(*emitter))
             throw SceneError(emitter->location(), "causticEmitter: sms connects only to area, point and spot emitters");
-    stats_.reset();
 }
+
+void SmsConnection::begin() const { stats_.reset(); }
 
 void SmsConnection::end() const {
     std::fprintf(stderr, "sms: %" PRIu64 " estimates, %" PRIu64 " solver trials, success rate %.1f%%",

@@ -20,7 +20,8 @@ class Shape;
 class SmsConnection final : public CausticConnection {
 public:
     explicit SmsConnection(const Properties &props);
-    void begin(const Scene &scene) const override;
+    void check(const Scene &scene) const override;
+    void begin() const override;
     void end() const override;
     bool receives(const Intersection &its) const override;
     Spectrum estimate(const Scene &scene, Sampler &sampler, const Intersection &its) const override;

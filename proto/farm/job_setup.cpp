@@ -49,6 +49,7 @@ std::unique_ptr<Integrator> makeIntegrator(const Scene &scene, const std::string
                 props.set(shared, fileProps.type(shared), fileProps.value(shared), fileProps.locationOf(shared));
     applyParams(props, params);
     auto integrator = createIntegrator(type, props, false);
+    integrator->checkScene(scene);
     UnusedParameters unused(strict);
     props.checkUsed(unused);
     if (warnings) warnings->insert(warnings->end(), unused.warnings().begin(), unused.warnings().end());
