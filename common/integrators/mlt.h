@@ -20,7 +20,9 @@
 //   manifoldGlossyAngle (1)        dtheta of the manifold perturbation's glossy classification, in degrees:
 //                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
 //                                  value); 0 leaves every glossy vertex non-specular
-//   twoStage (false)               rejected when true: two-stage MLT is not implemented
+//   twoStage (false)               two-stage MLT (render/two_stage.h): a first stage's low-resolution image
+//                                  I steers the chains, whose target becomes L / I
+//   firstStageSizeReduction (16)   the first stage's image is this many times smaller in x and y
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
 //
@@ -87,6 +89,7 @@ public:
 
 private:
     int64_t luminanceSamples_ = 100000;
+    int firstStageReduction_ = 0;
     bool manifoldExploration_ = false;
 };
 
