@@ -198,6 +198,17 @@ TEST(PngToneMapping, ReinhardWithKeyAndBurn) {
     }
 }
 
+TEST(PngToneMapping, InvalidSettingsNameTheFile) {
+    const std::string dir = tempDir("image-formats-png-invalid");
+    for (const auto &[key, burn] : {std::pair{0.0, 0.0}, std::pair{0.18, 1.5}, std::pair{0.18, -0.1}}) {
+        ToneMap t;
+        t.method = ToneMap::Method::Reinhard;
+        t.key = key;
+        t.burn = burn;
+        EXPECT_NE(sceneErrorOf([&] { writePNG(dir + "/bad.png", testImage(), t); }).find("bad.png"), std::string::npos);
+    }
+}
+
 TEST(PngToneMapping, PixelFormats) {
     const std::string dir = tempDir("image-formats-png-pixels");
     const Bitmap img = testImage();
@@ -343,12 +354,14 @@ TEST(TextureFormats, DamagedFilesNameTheFile) {
     std::ifstream in(dir + "/good.hdr", std::ios::binary);
     std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     writeFile(dir, "truncated.hdr", data.substr(0, data.find("\n\n") + 2 + 8));  // header, size line cut
+    writeFile(dir, "short.hdr", data.substr(0, data.size() - 5));                // flat pixels (4 wide), cut
     writeFile(dir, "header.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 999999 +X 999999\n");
     writeFile(dir, "garbage.tga", std::string(10, '\x07'));
     writeFile(dir, "notype.tga", std::string("\0\0\x09", 3) + std::string(40, '\0'));
     writeFile(dir, "short.bmp", "BM\x10\0\0\0");
     writeFile(dir, "text.hdr", "just text");
-    for (const char *f : {"truncated.hdr", "header.hdr", "garbage.tga", "notype.tga", "short.bmp", "text.hdr"})
+    for (const char *f :
+         {"truncated.hdr", "short.hdr", "header.hdr", "garbage.tga", "notype.tga", "short.bmp", "text.hdr"})
         EXPECT_NE(sceneErrorOf([&] { makePlugin(ObjectKind::Texture, "bitmap", dir, f); }).find(f), std::string::npos)
             << f;
 }

@@ -92,6 +92,20 @@ bool isRGBE(const std::vector<unsigned char> &data) {
            startsWith(data, {'#', '?', 'R', 'G', 'B', 'E', '\n'});
 }
 
+// stb_image 2.27 decodes a flat (not run-length encoded) RGBE file that ends early as black pixels, so
+// its length is checked first: the pixels follow the header's empty line and the resolution line, and a
+// flat file holds 4 bytes per pixel (a run-length encoded scanline starts with 2, 2; stb checks those).
+bool rgbeEndsEarly(const std::vector<unsigned char> &d, int64_t w, int64_t h) {
+    const unsigned char blank[2] = {'\n', '\n'};
+    auto it = std::search(d.begin(), d.end(), blank, blank + 2);
+    if (it == d.end()) return true;
+    it = std::find(it + 2, d.end(), '\n');
+    if (it == d.end()) return true;
+    const size_t start = static_cast<size_t>(it - d.begin()) + 1, left = d.size() - start;
+    const bool rle = w >= 8 && w < 32768 && left >= 2 && d[start] == 2 && d[start + 1] == 2;
+    return !rle && left < static_cast<size_t>(4 * w * h);
+}
+
 bool isBMP(const std::vector<unsigned char> &data) { return startsWith(data, {'B', 'M'}); }
 
 // Targa has no magic number; its header's colour-map and image types must be ones stb decodes
@@ -308,6 +322,7 @@ Bitmap readLDR(const std::string &path, bool srgb) {
     Bitmap img(w, h);
     const size_t count = img.rgb.size();
     if (rgbe) {
+        if (rgbeEndsEarly(data, w, h)) corrupt(" (pixel data ends early)");
         std::unique_ptr<float, StbFree> pixels(stbi_loadf_from_memory(bytes, len, &w, &h, &n, 3));
         if (!pixels) corrupt(std::string(": ") + stbi_failure_reason());
         std::copy(pixels.get(), pixels.get() + count, img.rgb.begin());
