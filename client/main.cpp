@@ -70,8 +70,10 @@ int runRender(const RenderArgs &a) {
     png = exr;
     png.replace_extension(".png");
     if (exr.has_parent_path()) std::filesystem::create_directories(exr.parent_path());
-    pf::writeEXR(exr.string(), image);
-    pf::writePNG(png.string(), image, scene->sensor().film().exposure());
+    // The film's formats and tone mapping (hdrfilm's pixelFormat/componentFormat, ldrfilm's tonemapMethod).
+    const pf::Film &film = scene->sensor().film();
+    pf::writeEXR(exr.string(), image, film.exrFormat());
+    pf::writePNG(png.string(), image, film.toneMap(), film.pngPixelFormat());
 
     const double secs = std::max(stats.seconds, 1e-9);
     std::printf("%s: %dx%d, %lld spp, %s, %.2f s render (%.2f s load), %.3g samples/s, %.3g rays/s, %d threads -> %s\n",

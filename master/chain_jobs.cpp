@@ -62,10 +62,15 @@ void Master::openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &
 }
 
 uint64_t Master::maxSeedingPayloadBytes(const JobRuntime &j, const v1::TaskSpec &work) {
-    // Packed path records take at most 38 bytes; a BDPT sample yields one candidate per strategy.
-    constexpr uint64_t kRecordBytes = 40, kMaxCandidatesPerSample = 256;
+    // Packed path records take at most 38 bytes (43 with a two-stage cell); a BDPT sample yields one
+    // candidate per strategy. Two-stage MLT's first-stage image adds 8 bytes per cell.
+    constexpr uint64_t kRecordBytes = 44, kMaxCandidatesPerSample = 256;
+    const ChainJob &job = *j.film.chain->job;
+    const int reduction = job.seedingConfig().firstStageReduction;
+    const uint64_t cells =
+        reduction > 0 ? FirstStageImage::zero(job.scene().sensor().film(), reduction).luminance.size() : 0;
     return work.seeding().pixel_count() * static_cast<uint64_t>(j.seedingSpp) * kMaxCandidatesPerSample * kRecordBytes +
-           (64 << 10);
+           cells * 8 + (64 << 10);
 }
 
 bool Master::startsPass(const JobRuntime &j, int64_t index) {

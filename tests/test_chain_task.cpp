@@ -211,8 +211,9 @@ TEST(ChainTask, Parameters) {
                                             {"directSampling", "false"},
                                             {"mutationSizeLow", "0.001"},
                                             {"mutationSizeHigh", "0.02"},
-                                            {"twoStage", "false"}}));
-        fails(type, "twoStage", "true", "two-stage MLT is not implemented");
+                                            {"twoStage", "true"},
+                                            {"firstStageSizeReduction", "8"}}));
+        fails(type, "firstStageSizeReduction", "0", "firstStageSizeReduction");
         fails(type, "noSuchParameter", "1", "noSuchParameter");
         fails(type, "pLarge", "1.5", "pLarge");
         fails(type, "mutationSizeLow", "0.5", "mutationSizeLow");

@@ -96,7 +96,8 @@ TEST(MLTParameters, MitsubaNamesAndChecks) {
                                         {"rrDepth", "7"},
                                         {"directSamples", "-1"},
                                         {"luminanceSamples", "5000"},
-                                        {"twoStage", "false"},
+                                        {"twoStage", "true"},
+                                        {"firstStageSizeReduction", "8"},
                                         {"bidirectionalMutation", "true"},
                                         {"lensPerturbation", "false"},
                                         {"causticPerturbation", "true"},
@@ -124,7 +125,7 @@ TEST(MLTParameters, MitsubaNamesAndChecks) {
         }
     };
     fails({{"probFactor", "0.0"}}, "lambda");
-    fails({{"twoStage", "true"}}, "two-stage MLT is not implemented");
+    fails({{"firstStageSizeReduction", "0"}}, "firstStageSizeReduction");
     fails({{"maxDepth", "0"}}, "maxDepth");
     fails({{"rrDepth", "0"}}, "rrDepth");
     fails({{"directSamples", "-2"}}, "directSamples");

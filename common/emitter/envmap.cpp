@@ -37,7 +37,8 @@ protected:
     Spectrum integratedRadiance() const override { return map_.integral() * scale_; }
 
 private:
-    // Mitsuba's `gamma`: 0 (default) = decide by file type (EXR linear, PNG/JPEG sRGB), -1 = sRGB curve,
+    // Mitsuba's `gamma`: 0 (default) = decide by file type (EXR and Radiance RGBE linear, PNG, JPEG, BMP
+    // and Targa sRGB), -1 = sRGB curve,
     // any positive value = a pure power law.
     static Bitmap loadMap(const Properties &props, const LoadContext &ctx) {
         const std::string path = ctx.resolve(props, "filename");

@@ -1,5 +1,5 @@
-// Image file I/O: OpenEXR through the OpenEXR 3 C++ API, PNG and JPEG through stb_image, PNG output
-// through stb_image_write.
+// Image file I/O: OpenEXR through the OpenEXR 3 C++ API, PNG, JPEG, BMP, Targa and Radiance RGBE (.hdr)
+// through stb_image, PNG output through stb_image_write.
 //
 // Every failure on input becomes a SceneError naming the file: files come from user scene bundles and
 // render outputs, and a bad one must never crash a worker. Formats are recognised by their magic
@@ -10,6 +10,9 @@
 // clang-format off: the configuration macros must precede their headers.
 #define STBI_ONLY_PNG
 #define STBI_ONLY_JPEG
+#define STBI_ONLY_BMP
+#define STBI_ONLY_TGA
+#define STBI_ONLY_HDR
 #define STBI_NO_STDIO
 #define STB_IMAGE_IMPLEMENTATION
 #include <stb_image.h>
@@ -23,6 +26,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <half.h>
 
 #include <algorithm>
 #include <array>
@@ -37,6 +41,7 @@
 
 #include "core/error.h"
 #include "image/bitmap.h"
+#include "image/tonemap.h"
 
 namespace pf {
 
@@ -80,6 +85,36 @@ bool startsWith(const std::vector<unsigned char> &data, std::initializer_list<un
 bool isEXR(const std::vector<unsigned char> &data) { return startsWith(data, {0x76, 0x2f, 0x31, 0x01}); }
 
 bool isJPEG(const std::vector<unsigned char> &data) { return startsWith(data, {0xff, 0xd8, 0xff}); }
+
+// Radiance's header starts "#?RADIANCE" or "#?RGBE" (Ward, Graphics Gems II, "Real pixels").
+bool isRGBE(const std::vector<unsigned char> &data) {
+    return startsWith(data, {'#', '?', 'R', 'A', 'D', 'I', 'A', 'N', 'C', 'E', '\n'}) ||
+           startsWith(data, {'#', '?', 'R', 'G', 'B', 'E', '\n'});
+}
+
+// stb_image 2.27 decodes a flat (not run-length encoded) RGBE file that ends early as black pixels, so
+// its length is checked first: the pixels follow the header's empty line and the resolution line, and a
+// flat file holds 4 bytes per pixel (a run-length encoded scanline starts with 2, 2; stb checks those).
+bool rgbeEndsEarly(const std::vector<unsigned char> &d, int64_t w, int64_t h) {
+    const unsigned char blank[2] = {'\n', '\n'};
+    auto it = std::search(d.begin(), d.end(), blank, blank + 2);
+    if (it == d.end()) return true;
+    it = std::find(it + 2, d.end(), '\n');
+    if (it == d.end()) return true;
+    const size_t start = static_cast<size_t>(it - d.begin()) + 1, left = d.size() - start;
+    const bool rle = w >= 8 && w < 32768 && left >= 2 && d[start] == 2 && d[start + 1] == 2;
+    return !rle && left < static_cast<size_t>(4 * w * h);
+}
+
+bool isBMP(const std::vector<unsigned char> &data) { return startsWith(data, {'B', 'M'}); }
+
+// Targa has no magic number; its header's colour-map and image types must be ones stb decodes
+// (uncompressed or RLE; colour-mapped, true-colour or grey).
+bool isTarga(const std::vector<unsigned char> &data) {
+    if (data.size() < 18 || data[1] > 1) return false;
+    const unsigned type = data[2] & ~8u;
+    return type >= 1 && type <= 3;
+}
 
 // Walks the marker segments of a JPEG (ITU-T T.81 Annex B) and checks what stb_image cannot be trusted
 // with: stb 2.27 (Debian 12) does not bound the number of codes in a Huffman table (DHT) and writes
@@ -195,21 +230,58 @@ Bitmap readEXR(const std::string &path) {
     }
 }
 
-void writeEXR(const std::string &path, const Bitmap &img) {
+namespace {
+
+bool hasAlpha(PixelFormat f) { return f == PixelFormat::RGBA || f == PixelFormat::LuminanceAlpha; }
+bool isGrey(PixelFormat f) { return f == PixelFormat::Luminance || f == PixelFormat::LuminanceAlpha; }
+
+// The image's values in the pixel format's channel order, `channels` per pixel.
+template <class T, class Convert>
+std::vector<T> interleave(const Bitmap &img, PixelFormat f, int channels, const Convert &convert) {
+    const size_t pixels = static_cast<size_t>(img.width) * static_cast<size_t>(img.height);
+    std::vector<T> out(pixels * static_cast<size_t>(channels));
+    for (size_t p = 0; p < pixels; ++p) {
+        T *o = &out[p * static_cast<size_t>(channels)];
+        const float *in = &img.rgb[3 * p];
+        if (isGrey(f))
+            o[0] = convert(Spectrum(in[0], in[1], in[2]).luminance());
+        else
+            for (int c = 0; c < 3; ++c) o[c] = convert(in[c]);
+        if (hasAlpha(f)) o[channels - 1] = convert(1.0);
+    }
+    return out;
+}
+
+}  // namespace
+
+void writeEXR(const std::string &path, const Bitmap &img, const EXRFormat &format) {
     checkWritable(path, img);
+    const bool half = format.component == ComponentFormat::Float16;
+    std::vector<const char *> names =
+        isGrey(format.pixels) ? std::vector<const char *>{"Y"} : std::vector<const char *>{"R", "G", "B"};
+    if (hasAlpha(format.pixels)) names.push_back("A");
+    const int channels = static_cast<int>(names.size());
+    // OpenEXR's Slice takes a non-const pointer but only reads through it when writing.
+    const std::vector<float> floats =
+        half ? std::vector<float>{}
+             : interleave<float>(img, format.pixels, channels, [](double v) { return float(v); });
+    const std::vector<Imath::half> halves =
+        half ? interleave<Imath::half>(img, format.pixels, channels, [](double v) { return Imath::half(float(v)); })
+             : std::vector<Imath::half>{};
     writeAtomically(path, [&](const std::string &tmp) {
         try {
             Imf::Header header(img.width, img.height);
-            for (const char *c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+            const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
+            for (const char *c : names) header.channels().insert(c, Imf::Channel(type));
             for (const auto &[key, value] : img.metadata) header.insert(key, Imf::StringAttribute(value));
             Imf::FrameBuffer fb;
-            constexpr size_t px = 3 * sizeof(float);
-            // OpenEXR's Slice takes a non-const pointer but only reads through it when writing.
-            char *base = const_cast<char *>(reinterpret_cast<const char *>(img.rgb.data()));
+            const size_t size = half ? sizeof(Imath::half) : sizeof(float), px = size * static_cast<size_t>(channels);
+            char *base = const_cast<char *>(half ? reinterpret_cast<const char *>(halves.data())
+                                                 : reinterpret_cast<const char *>(floats.data()));
             const size_t row = px * static_cast<size_t>(img.width);
-            fb.insert("R", Imf::Slice(Imf::FLOAT, base, px, row));
-            fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), px, row));
-            fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), px, row));
+            for (int c = 0; c < channels; ++c)
+                fb.insert(names[static_cast<size_t>(c)],
+                          Imf::Slice(type, base + size * static_cast<size_t>(c), px, row));
             Imf::OutputFile out(tmp.c_str(), header);
             out.setFrameBuffer(fb);
             out.writePixels(img.height);
@@ -219,30 +291,42 @@ void writeEXR(const std::string &path, const Bitmap &img) {
     });
 }
 
-// PNG and JPEG hold 8 or 16-bit values, returned as [0, 1] floats and sRGB-decoded on request.
+// PNG, JPEG, BMP and Targa hold 8 or 16-bit values, returned as [0, 1] floats and sRGB-decoded on request;
+// Radiance RGBE holds linear radiance, returned as it is. The format is the file's magic number (Targa,
+// which has none: the .tga extension and a header of a type stb decodes).
 Bitmap readLDR(const std::string &path, bool srgb) {
     const std::vector<unsigned char> data = readFile(path);
-    const bool png = startsWith(data, {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'});
-    if (!png && !isJPEG(data)) fail(path, "not a PNG or JPEG image");
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    const bool png = startsWith(data, {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}), jpeg = isJPEG(data),
+               rgbe = isRGBE(data), bmp = isBMP(data), tga = ext == ".tga" && !png && !jpeg && !rgbe && !bmp;
+    const char *format = png ? "PNG" : jpeg ? "JPEG" : rgbe ? "Radiance RGBE" : bmp ? "BMP" : "Targa";
+    if (!png && !jpeg && !rgbe && !bmp && !tga) fail(path, "not a PNG, JPEG, BMP, Targa or Radiance RGBE image");
     if (data.size() > static_cast<size_t>(std::numeric_limits<int>::max())) fail(path, "image file too large");
     const auto *bytes = data.data();
     const int len = static_cast<int>(data.size());
     // stb's own failure reason is only meaningful once the decoder of the right format has run; after
     // stbi_info it names whichever format was probed last.
     auto corrupt = [&](const std::string &detail) {
-        fail(path, std::string("corrupt or truncated ") + (png ? "PNG" : "JPEG") + " file" + detail);
+        fail(path, std::string("corrupt or truncated ") + format + " file" + detail);
     };
-    if (!png) {
+    if (jpeg) {
         const std::string defect = jpegDefect(data);
         if (!defect.empty()) corrupt(" (" + defect + ")");
     }
+    if (tga && !isTarga(data)) corrupt(" (not a Targa type stb decodes)");
     int w = 0, h = 0, n = 0;
     if (!stbi_info_from_memory(bytes, len, &w, &h, &n)) corrupt(" (unreadable header)");
     checkSize(path, w, h);
 
     Bitmap img(w, h);
     const size_t count = img.rgb.size();
-    if (stbi_is_16_bit_from_memory(bytes, len)) {
+    if (rgbe) {
+        if (rgbeEndsEarly(data, w, h)) corrupt(" (pixel data ends early)");
+        std::unique_ptr<float, StbFree> pixels(stbi_loadf_from_memory(bytes, len, &w, &h, &n, 3));
+        if (!pixels) corrupt(std::string(": ") + stbi_failure_reason());
+        std::copy(pixels.get(), pixels.get() + count, img.rgb.begin());
+    } else if (stbi_is_16_bit_from_memory(bytes, len)) {
         std::unique_ptr<stbi_us, StbFree> pixels(stbi_load_16_from_memory(bytes, len, &w, &h, &n, 3));
         if (!pixels) corrupt(std::string(": ") + stbi_failure_reason());
         for (size_t i = 0; i < count; ++i) {
@@ -259,21 +343,37 @@ Bitmap readLDR(const std::string &path, bool srgb) {
     return img;
 }
 
-void writePNG(const std::string &path, const Bitmap &img, double exposure, double gamma) {
+void writePNG(const std::string &path, const Bitmap &img, const ToneMap &t, PixelFormat pixels) {
     checkWritable(path, img);
-    if (!std::isfinite(exposure) || !(gamma == -1.0 || gamma > 0)) fail(path, "invalid exposure or gamma for PNG");
-    const double scale = std::exp2(exposure);
-    std::vector<unsigned char> bytes(img.rgb.size());
-    for (size_t i = 0; i < bytes.size(); ++i) {
-        double v = img.rgb[i] * scale;
-        v = v > 0 ? v : 0.0;  // also maps NaN to black
-        v = gamma == -1.0 ? linearToSrgb(v) : std::pow(v, 1.0 / gamma);
-        bytes[i] = static_cast<unsigned char>(std::lround(std::min(v, 1.0) * 255.0));
+    if (!std::isfinite(t.exposure) || !(t.gamma == -1.0 || t.gamma > 0) || !(t.key > 0) ||
+        !(t.burn >= 0 && t.burn <= 1))
+        fail(path, "invalid exposure, gamma, key or burn for PNG");
+    // Grey formats tone-map the luminance; then the pixel format's channels of the display values, quantised.
+    Bitmap grey;
+    if (isGrey(pixels)) {
+        grey = Bitmap(img.width, img.height);
+        for (size_t p = 0; p < grey.rgb.size(); p += 3)
+            grey.rgb[p] = grey.rgb[p + 1] = grey.rgb[p + 2] =
+                static_cast<float>(Spectrum(img.rgb[p], img.rgb[p + 1], img.rgb[p + 2]).luminance());
     }
+    Bitmap display(img.width, img.height);
+    const std::vector<double> values = toneMap(isGrey(pixels) ? grey : img, t);
+    std::transform(values.begin(), values.end(), display.rgb.begin(), [](double v) { return float(v); });
+    const int channels = (isGrey(pixels) ? 1 : 3) + (hasAlpha(pixels) ? 1 : 0);
+    const std::vector<unsigned char> bytes = interleave<unsigned char>(display, pixels, channels, [](double v) {
+        return static_cast<unsigned char>(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
+    });
     writeAtomically(path, [&](const std::string &tmp) {
-        if (!stbi_write_png(tmp.c_str(), img.width, img.height, 3, bytes.data(), img.width * 3))
+        if (!stbi_write_png(tmp.c_str(), img.width, img.height, channels, bytes.data(), img.width * channels))
             fail(path, "cannot write PNG file");
     });
+}
+
+void writePNG(const std::string &path, const Bitmap &img, double exposure, double gamma) {
+    ToneMap t;
+    t.exposure = exposure;
+    t.gamma = gamma;
+    writePNG(path, img, t);
 }
 
 Bitmap readImage(const std::string &path, bool srgbForLDR) {

@@ -12,6 +12,7 @@
 #include "core/vector.h"
 #include "image/bitmap.h"
 #include "image/rfilter.h"
+#include "image/tonemap.h"
 #include "scene/object.h"
 
 namespace pf {
@@ -78,6 +79,12 @@ public:
     double exposure() const { return exposure_; }
     // ldrfilm's transfer curve: -1 = sRGB (Mitsuba's default), otherwise a pure power 1/gamma.
     double gamma() const { return gamma_; }
+    // ldrfilm's tone mapping of the PNG (hdrfilm: the default, sRGB without exposure).
+    const ToneMap &toneMap() const { return toneMap_; }
+    // The EXR's pixelFormat and componentFormat (hdrfilm; float32 unless componentFormat is given), and
+    // the PNG's pixelFormat (ldrfilm).
+    const EXRFormat &exrFormat() const { return exrFormat_; }
+    PixelFormat pngPixelFormat() const { return pngPixels_; }
     // Output format the scene asked for: "openexr", "rgbe" or "pfm" (hdrfilm), "png" or "jpeg" (ldrfilm).
     const std::string &fileFormat() const { return fileFormat_; }
     // Mitsuba's highQualityEdges: also sample raster positions up to the filter border outside the crop
@@ -110,6 +117,9 @@ protected:
     bool hdr_ = true;
     double exposure_ = 0.0;
     double gamma_ = -1.0;
+    ToneMap toneMap_;
+    EXRFormat exrFormat_;
+    PixelFormat pngPixels_ = PixelFormat::RGB;
     std::string fileFormat_ = "openexr";
     bool highQualityEdges_ = false;
 };

@@ -1,13 +1,13 @@
 // Film and reconstruction-filter plugins with Mitsuba 0.6's parameters (src/films/hdrfilm.cpp,
 // ldrfilm.cpp, src/librender/film.cpp, src/rfilters/*.cpp).
 //
-// What is used: the size and crop window, highQualityEdges, the filter, and for ldrfilm the exposure
-// and gamma of the PNG preview; fileFormat is recorded for the writer. Parameters that only shape
-// Mitsuba's output file (pixelFormat, componentFormat, banner, attachLog, tonemapMethod, key, burn)
-// are validated like Mitsuba does and otherwise ignored: pathfarm always writes a float32 RGB EXR plus
-// an sRGB PNG preview, without banner or log, and the preview uses the exposure/gamma curve even when
-// the Reinhard operator is requested. Mitsuba's render-time annotations (metadata['..'], label[..])
-// are not accepted.
+// What is used: the size and crop window, highQualityEdges, the filter; hdrfilm's pixelFormat (rgb,
+// rgba, luminance, luminanceAlpha) and componentFormat (float16, float32) for the EXR; ldrfilm's
+// tonemapMethod, gamma, exposure, key and burn (image/tonemap.h) and pixelFormat for the PNG beside it.
+// fileFormat is recorded. pathfarm's EXR stays float32 unless componentFormat is given (Mitsuba's default
+// is float16): its renders feed `diff` and `compare`. Accepted as Mitsuba does and not honoured: hdrfilm's
+// xyz/xyza (written as rgb/rgba) and uint32 (written as float32), banner and attachLog. Mitsuba's
+// render-time annotations (metadata['..'], label[..]) are not accepted.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -38,6 +38,14 @@ std::string getChoice(const Properties &props, const std::string &name, const st
     props.fail(name, "'" + value + "' is not one of: " + list);
 }
 
+// Mitsuba's pixelFormat names (lowercase); xyz is written as rgb (not honoured, see above).
+PixelFormat pixelFormat(const std::string &name) {
+    if (name == "luminance") return PixelFormat::Luminance;
+    if (name == "luminancealpha") return PixelFormat::LuminanceAlpha;
+    if (name == "rgba" || name == "xyza") return PixelFormat::RGBA;
+    return PixelFormat::RGB;
+}
+
 class ConfiguredFilm final : public Film {
 public:
     ConfiguredFilm(const Properties &props, bool hdr) {
@@ -49,22 +57,29 @@ public:
             fileFormat_ = getChoice(props, "fileFormat", "openexr", {"openexr", "rgbe", "pfm"});
             // Mitsuba 0.6 in RGB mode rejects the spectrum* formats; the multichannel lists of
             // hdrfilm are not supported here.
-            getChoice(props, "pixelFormat", "rgb", {"luminance", "luminancealpha", "rgb", "rgba", "xyz", "xyza"});
-            getChoice(props, "componentFormat", "float16", {"float16", "float32", "uint32"});
+            exrFormat_.pixels = pixelFormat(
+                getChoice(props, "pixelFormat", "rgb", {"luminance", "luminancealpha", "rgb", "rgba", "xyz", "xyza"}));
+            if (getChoice(props, "componentFormat", "float32", {"float16", "float32", "uint32"}) == "float16")
+                exrFormat_.component = ComponentFormat::Float16;
             props.getBool("attachLog", true);
         } else {
             fileFormat_ = getChoice(props, "fileFormat", "png", {"png", "jpeg", "jpg"});
             if (fileFormat_ == "jpg") fileFormat_ = "jpeg";
-            getChoice(props, "pixelFormat", "rgb", {"luminance", "luminancealpha", "rgb", "rgba"});
-            getChoice(props, "tonemapMethod", "gamma", {"gamma", "reinhard"});
+            pngPixels_ =
+                pixelFormat(getChoice(props, "pixelFormat", "rgb", {"luminance", "luminancealpha", "rgb", "rgba"}));
+            if (getChoice(props, "tonemapMethod", "gamma", {"gamma", "reinhard"}) == "reinhard")
+                toneMap_.method = ToneMap::Method::Reinhard;
             gamma_ = props.getFloat("gamma", -1.0);
             if (gamma_ != -1.0 && !(gamma_ > 0)) props.fail("gamma", "must be -1 (sRGB) or positive");
             // 2^100 already saturates any radiance a float holds; larger values only overflow.
             exposure_ = props.getFloat("exposure", 0.0);
             if (std::abs(exposure_) > 100) props.fail("exposure", "must lie in [-100, 100] stops");
-            if (!(props.getFloat("key", 0.18) > 0)) props.fail("key", "must be positive");
-            const double burn = props.getFloat("burn", 0.0);
-            if (burn < 0 || burn > 1) props.fail("burn", "must lie in [0, 1]");
+            toneMap_.key = props.getFloat("key", 0.18);
+            if (!(toneMap_.key > 0)) props.fail("key", "must be positive");
+            toneMap_.burn = props.getFloat("burn", 0.0);
+            if (!(toneMap_.burn >= 0 && toneMap_.burn <= 1)) props.fail("burn", "must lie in [0, 1]");
+            toneMap_.gamma = gamma_;
+            toneMap_.exposure = exposure_;
         }
         readFilter(props);
     }

@@ -117,7 +117,8 @@ void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const C
     MutablePath start;
     bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });
     const MutationSet set = mutations(scene, task.lambda);
-    PathChain chain(scene, set, minVertices(), maxVertices(), film, scale);
+    PathChain chain(scene, set, minVertices(), maxVertices(), film, scale,
+                    task.firstStage.enabled() ? &task.firstStage : nullptr);
     // A candidate carries energy, so its path does; pi = 0 could only come from round-off in re-evaluating
     // a Dirac vertex from the other side, and such a start is left out rather than divided by.
     if (start.length() > 0 && chain.start(start) > 0) runMetropolis(chain, task.mutations, rng, nullptr, counts);
@@ -143,14 +144,15 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
     luminanceSamples_ = props.getInt("luminanceSamples", 100000);
     if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
     if (lambdaAuto()) props.fail("lambda", "\"auto\" is for erpt and mept (their luminance pilot tunes it)");
-    if (props.getBool("twoStage", false))
-        props.fail("twoStage", "two-stage MLT is not implemented (leave twoStage false)");
+    firstStageReduction_ = readTwoStage(props);
 }
 
 SeedingConfig MLT::seeding(const Scene &scene, int64_t) const {
     const Film &film = scene.sensor().film();
     const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
-    return seedingWith(std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels));
+    SeedingConfig config = seedingWith(std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels));
+    config.firstStageReduction = firstStageReduction_;
+    return config;
 }
 
 }  // namespace pf

@@ -23,7 +23,9 @@
 //   mediumChains (true)            whether medium vertices may join the manifold perturbation's chains (§6.7),
 //                                  classified with the same angle against their phase function's median
 //   mediumDistancePerturbation (= manifoldPerturbation)  the medium-distance perturbation
-//   twoStage (false)               rejected when true: two-stage MLT is not implemented
+//   twoStage (false)               two-stage MLT (render/two_stage.h): a first stage's low-resolution image
+//                                  I steers the chains, whose target becomes L / I
+//   firstStageSizeReduction (16)   the first stage's image is this many times smaller in x and y
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
 //
@@ -91,6 +93,7 @@ public:
 
 private:
     int64_t luminanceSamples_ = 100000;
+    int firstStageReduction_ = 0;
     bool manifoldExploration_ = false;
 };
 

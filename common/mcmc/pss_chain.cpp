@@ -4,23 +4,23 @@
 
 namespace pf {
 
-double splatLuminance(const SplatList &splats) {
+double splatLuminance(const SplatList &splats, const FirstStageImage *firstStage) {
     double sum = 0;
-    for (const Splat &s : splats) sum += s.value.luminance();
+    for (const Splat &s : splats) sum += s.value.luminance() * (firstStage ? firstStage->targetFactor(s.raster) : 1.0);
     return sum;
 }
 
 MutationCounts PrimarySampleChain::mutationTypes() { return {{"largeStep", 0, 0}, {"smallStep", 0, 0}}; }
 
 PrimarySampleChain::PrimarySampleChain(PrimarySampleFunction psi, const PrimarySampleOptions &options, ImageBlock &film,
-                                       double scale)
-    : psi_(std::move(psi)), options_(options), film_(film), scale_(scale), u_(options.sizes) {}
+                                       double scale, const FirstStageImage *firstStage)
+    : psi_(std::move(psi)), options_(options), film_(film), scale_(scale), firstStage_(firstStage), u_(options.sizes) {}
 
 double PrimarySampleChain::start(const std::vector<double> &prefix, Sampler &source) {
     u_.start(prefix, source);
     current_.clear();
     psi_(u_, current_);
-    currentTarget_ = splatLuminance(current_);
+    currentTarget_ = splatLuminance(current_, firstStage_);
     return currentTarget_;
 }
 
@@ -29,7 +29,7 @@ Proposal PrimarySampleChain::propose(PCG32 &rng) {
     u_.propose(large, rng);
     proposed_.clear();
     psi_(u_, proposed_);
-    proposedTarget_ = splatLuminance(proposed_);
+    proposedTarget_ = splatLuminance(proposed_, firstStage_);
     Proposal p;
     p.type = large ? kLargeStep : kSmallStep;
     p.target = proposedTarget_;

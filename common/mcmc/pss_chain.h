@@ -9,6 +9,7 @@
 #include "integrators/integrator.h"
 #include "mcmc/metropolis.h"
 #include "mcmc/primary_sample.h"
+#include "render/two_stage.h"
 
 namespace pf {
 
@@ -20,8 +21,9 @@ struct PrimarySampleOptions {
     MutationSizes sizes;
 };
 
-// The luminance of a list of splats: pi of the state that produced them.
-double splatLuminance(const SplatList &splats);
+// The luminance of a list of splats: pi of the state that produced them; with a first stage (two-stage
+// MLT, render/two_stage.h) each splat's luminance divided by the first stage's image where it lands.
+double splatLuminance(const SplatList &splats, const FirstStageImage *firstStage = nullptr);
 
 class PrimarySampleChain final : public MarkovChain {
 public:
@@ -29,8 +31,9 @@ public:
     // The mutation types in Proposal::type order, with zero counts.
     static MutationCounts mutationTypes();
 
-    // Deposits go to `film`, multiplied by `scale`.
-    PrimarySampleChain(PrimarySampleFunction psi, const PrimarySampleOptions &options, ImageBlock &film, double scale);
+    // Deposits go to `film`, multiplied by `scale`; the target is splatLuminance(splats, firstStage).
+    PrimarySampleChain(PrimarySampleFunction psi, const PrimarySampleOptions &options, ImageBlock &film, double scale,
+                       const FirstStageImage *firstStage = nullptr);
     // Evaluates the start state (see PrimarySample::start) and returns its pi.
     double start(const std::vector<double> &prefix, Sampler &source);
 
@@ -50,6 +53,7 @@ private:
     PrimarySampleOptions options_;
     ImageBlock &film_;
     double scale_;
+    const FirstStageImage *firstStage_;
     PrimarySample u_;
     SplatList current_, proposed_;
     double currentTarget_ = 0, proposedTarget_ = 0;

@@ -30,8 +30,7 @@ PrimarySampleIntegrator::PrimarySampleIntegrator(const Properties &props) {
     const bool sampleDirect = props.getBool("directSampling", true);
     options_.sizes.low = props.getFloat("mutationSizeLow", 1.0 / 1024.0);
     options_.sizes.high = props.getFloat("mutationSizeHigh", 1.0 / 64.0);
-    if (props.getBool("twoStage", false))
-        props.fail("twoStage", "two-stage MLT is not implemented (leave twoStage false)");
+    firstStageReduction_ = readTwoStage(props);
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -50,7 +49,8 @@ PrimarySampleIntegrator::PrimarySampleIntegrator(const Properties &props) {
 SeedingConfig PrimarySampleIntegrator::seeding(const Scene &scene, int64_t) const {
     const Film &film = scene.sensor().film();
     const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
-    return {bdpt_.get(), std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels), minDepth()};
+    return {bdpt_.get(), std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels), minDepth(),
+            firstStageReduction_};
 }
 
 PrimarySampleIntegrator::StartedChain PrimarySampleIntegrator::startChain(const Scene &scene, uint64_t jobSeed,
@@ -63,7 +63,9 @@ PrimarySampleIntegrator::StartedChain PrimarySampleIntegrator::startChain(const 
     IndependentSampler source(jobSeed, seed.record.pixel, seed.record.sampleIndex);
     const Vec2 raster = samplePixel(scene.sensor().film(), seed.record.pixel, source);
     ChainSetup s = setup(scene, task, seed, raster, rng);
-    StartedChain started{std::make_unique<PrimarySampleChain>(std::move(s.psi), options_, film, scale), {}};
+    StartedChain started{std::make_unique<PrimarySampleChain>(std::move(s.psi), options_, film, scale,
+                                                              task.firstStage.enabled() ? &task.firstStage : nullptr),
+                         {}};
     started.chain->start(s.prefix, source);
     // Kelemen's c is the integral of pi over the primary sample space; the raster coordinates spread a
     // sample over the whole film, so it is the image's luminance divided by the pixel count (§2.3).

@@ -18,7 +18,9 @@
 //                                   (ALGORITHMS.md §2.4).
 //   directSampling (true)           BDPT's s = 1 / t = 1 strategies sample their endpoint directly
 //   mutationSizeLow (1/1024), mutationSizeHigh (1/64)   small-step magnitudes s1, s2
-//   twoStage (false)                two-stage MLT is not implemented: true is rejected
+//   twoStage (false)                two-stage MLT (render/two_stage.h): a first stage's low-resolution image
+//                                   I steers the chains, whose target becomes L / I
+//   firstStageSizeReduction (16)    the first stage's image is this many times smaller in x and y
 #pragma once
 #include <memory>
 #include <optional>
@@ -68,6 +70,7 @@ private:
     std::unique_ptr<BDPT> bdpt_, direct_;
     int64_t directSamples_ = 16, luminanceSamples_ = 100000;
     bool kelemenWeights_ = true;
+    int firstStageReduction_ = 0;
     PrimarySampleOptions options_;
 };
 

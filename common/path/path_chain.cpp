@@ -19,13 +19,14 @@ private:
 }  // namespace
 
 PathChain::PathChain(const Scene &scene, const MutationSet &mutations, int minVertices, int maxVertices,
-                     ImageBlock &film, double scale)
+                     ImageBlock &film, double scale, const FirstStageImage *firstStage)
     : scene_(scene),
       mutations_(mutations),
       minVertices_(minVertices),
       maxVertices_(maxVertices),
       film_(film),
-      scale_(scale) {}
+      scale_(scale),
+      firstStage_(firstStage) {}
 
 MutationCounts PathChain::mutationTypes(const std::vector<MutationType> &types) {
     MutationCounts counts;
@@ -39,7 +40,7 @@ void PathChain::evaluate(State &state) const {
     const int n = pathDepth(state.path) + 1;
     const bool inRange = n >= minVertices_ && (maxVertices_ < 0 || n <= maxVertices_);
     state.f = inRange ? chainContribution(scene_, state.path) : Spectrum(0.0);
-    state.target = state.f.luminance();
+    state.target = state.f.luminance() * (firstStage_ ? firstStage_->targetFactor(state.path.raster()) : 1.0);
 }
 
 double PathChain::start(const PathView &x) {

@@ -8,6 +8,7 @@
 #include "image/film.h"
 #include "mcmc/metropolis.h"
 #include "path/mutation.h"
+#include "render/two_stage.h"
 
 namespace pf {
 
@@ -15,9 +16,10 @@ class PathChain final : public MarkovChain {
 public:
     // pi is zero outside minVertices .. maxVertices vertices, index-matched crossings counted as vertices
     // as Mitsuba does (pathDepth() + 1; maxVertices < 0: unbounded): paths left to
-    // a separately rendered component, or beyond maxDepth. Deposits go to `film`, times `scale`.
+    // a separately rendered component, or beyond maxDepth. Deposits go to `film`, times `scale`. With a first
+    // stage (two-stage MLT, render/two_stage.h) pi is the luminance divided by its image where x lands.
     PathChain(const Scene &scene, const MutationSet &mutations, int minVertices, int maxVertices, ImageBlock &film,
-              double scale);
+              double scale, const FirstStageImage *firstStage = nullptr);
     // The counts of a chain whose MutationSet holds `types` in this order (Proposal::type), then "none":
     // steps at which no mutation applies to the current path (the chain stays).
     static MutationCounts mutationTypes(const std::vector<MutationType> &types);
@@ -48,6 +50,7 @@ private:
     int minVertices_, maxVertices_;
     ImageBlock &film_;
     double scale_;
+    const FirstStageImage *firstStage_;
     State current_, proposed_;
 };
 

@@ -124,6 +124,7 @@ ChainTask ChainIntegrator::chainTask(const Scene &scene, const Normalizer &norma
     task.index = index;
     task.seeds = normalizer.resample(seed, index, chains);
     task.depthLuminance = normalizer.depthLuminance();
+    task.firstStage = normalizer.firstStage();
     uint64_t size = chainTaskMutations(scene);
     if (spp > 0) {
         const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), count = chainTaskCount(scene, spp);

@@ -40,6 +40,8 @@ struct ChainTask {
     std::optional<BurstPass> burst;
     // The manifold perturbation's jump size as the pilot tuned it (lambda=auto); 0: the integrator's.
     double lambda = 0;
+    // Two-stage MLT: the first stage's image; the chains' target is L / I (render/two_stage.h).
+    FirstStageImage firstStage;
 };
 
 struct ChainResult {

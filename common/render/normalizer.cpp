@@ -17,11 +17,31 @@ Normalizer::Normalizer(std::vector<SeedingResult> results) {
         if (depthLuminance_.size() < r.depthLuminance.size()) depthLuminance_.resize(r.depthLuminance.size(), 0.0);
         for (size_t d = 0; d < r.depthLuminance.size(); ++d) depthLuminance_[d] += r.depthLuminance[d];
         if (r.lambda > 0) lambda_ = r.lambda;
+        if (!r.firstStage.enabled()) continue;
+        if (!firstStage_.enabled())
+            firstStage_ = r.firstStage;
+        else
+            for (size_t c = 0; c < r.firstStage.luminance.size(); ++c)
+                firstStage_.luminance.at(c) += r.firstStage.luminance[c];
     }
+    if (firstStage_.enabled()) reweightForSecondStage();
     cumulative_.reserve(pool_.size() + 1);
     cumulative_.push_back(0.0);
     for (const SeedCandidate &c : pool_) cumulative_.push_back(cumulative_.back() + c.weight);
     for (double l : depthLuminance_) luminance_ += l;
+}
+
+void Normalizer::reweightForSecondStage() {
+    // The candidates of pi' = L / I are those of L with weights w / I (render/two_stage.h), and the
+    // luminance per depth (b̂' and Kelemen's constants) is theirs.
+    firstStage_ = firstStageImportance(std::move(firstStage_));
+    std::fill(depthLuminance_.begin(), depthLuminance_.end(), 0.0);
+    for (SeedCandidate &c : pool_) {
+        c.weight /= firstStage_.luminance.at(c.cell);
+        const size_t depth = static_cast<size_t>(c.record.s + c.record.t - 1);
+        if (depthLuminance_.size() <= depth) depthLuminance_.resize(depth + 1, 0.0);
+        depthLuminance_[depth] += c.weight;
+    }
 }
 
 size_t Normalizer::find(double target) const {

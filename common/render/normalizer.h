@@ -31,6 +31,9 @@ public:
     const std::vector<SeedCandidate> &candidates() const { return pool_; }
     // The jump size a seeding result tuned (lambda=auto), 0 if none did.
     double lambda() const { return lambda_; }
+    // Two-stage MLT: the first stage's image I that the chains' target is divided by (render/two_stage.h);
+    // the candidates' weights, b̂ and the luminance per depth are then those of that target.
+    const FirstStageImage &firstStage() const { return firstStage_; }
 
     // The starts of the `count` long chains of task `taskIndex` (weight 1: the merge rule applies W / K);
     // none when the pool carries no energy.
@@ -39,12 +42,14 @@ public:
 private:
     // Index into pool_ of the candidate at cumulative weight `target`.
     size_t find(double target) const;
+    void reweightForSecondStage();
 
     std::vector<SeedCandidate> pool_;
     std::vector<double> cumulative_;  // cumulative_[i] = sum of the weights before candidate i (size + 1)
     std::vector<double> depthLuminance_;
     double luminance_ = 0;
     double lambda_ = 0;
+    FirstStageImage firstStage_;
 };
 
 // The merged chain films of a render (or of a farm job so far).

@@ -38,14 +38,24 @@ std::vector<SeedingTask> seedingTasks(const Scene &scene) {
     return tasks;
 }
 
-void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
-                double scale, bool keep, SeedingResult &result) {
+void forEachSeedStrategy(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel,
+                         uint64_t sampleIndex, double scale,
+                         const std::function<void(const StrategySample &, double)> &fn) {
     IndependentSampler sampler(seed, pixel, sampleIndex);
     const Vec2 raster = samplePixel(scene.sensor().film(), pixel, sampler);
     config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
         const double weight = x.value.luminance() * scale;
-        if (x.depth < config.minDepth || !(weight > 0) || !std::isfinite(weight)) return;
-        if (keep) result.candidates.push_back({{pixel, sampleIndex, x.s, x.t}, weight});
+        if (x.depth >= config.minDepth && weight > 0 && std::isfinite(weight)) fn(x, weight);
+    });
+}
+
+void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
+                double scale, bool keep, SeedingResult &result) {
+    forEachSeedStrategy(scene, config, seed, pixel, sampleIndex, scale, [&](const StrategySample &x, double weight) {
+        if (keep)
+            result.candidates.push_back({{pixel, sampleIndex, x.s, x.t},
+                                         weight,
+                                         result.firstStage.enabled() ? result.firstStage.cell(x.raster) : 0});
         // Per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
         const size_t depth = static_cast<size_t>(x.s + x.t - 1);
         if (result.depthLuminance.size() <= depth) result.depthLuminance.resize(depth + 1, 0.0);
@@ -60,9 +70,13 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
     const Film &film = scene.sensor().film();
     const double perSample = 1.0 / static_cast<double>(config.samplesPerPixel);
     SeedingResult result;
+    if (config.firstStageReduction > 0) result.firstStage = FirstStageImage::zero(film, config.firstStageReduction);
     for (uint64_t i = task.firstPixel; i < task.firstPixel + task.pixelCount; ++i)
-        for (int64_t k = 0; k < config.samplesPerPixel; ++k)
+        for (int64_t k = 0; k < config.samplesPerPixel; ++k) {
             seedSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, true, result);
+            if (result.firstStage.enabled())
+                firstStageSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, result);
+        }
     result.samples = task.pixelCount * static_cast<uint64_t>(config.samplesPerPixel);
     result.rays = Scene::threadRayCount() - rays0;
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -11,16 +11,19 @@
 // the same bits, and seeding with seed S takes the same samples as `bdpt` rendering with seed S.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "image/film.h"
 #include "integrators/bdpt.h"
+#include "render/two_stage.h"
 
 namespace pf {
 
 struct SeedCandidate {
     PathRecord record;
     double weight = 0;  // luminance of the MIS-weighted contribution / samples per pixel
+    uint32_t cell = 0;  // two-stage MLT: the first stage's cell the strategy lands in (render/two_stage.h)
 };
 
 // What an algorithm asks of seeding; the same for every task of a job.
@@ -30,6 +33,8 @@ struct SeedingConfig {
     // Strategies of paths of smaller depth (edges plus index-matched crossings, path.h) are left out (the
     // component rendered without chains, as with Mitsuba's directSamples); 1 keeps every path.
     int minDepth = 1;
+    // Two-stage MLT (render/two_stage.h): the first stage's size reduction; 0: one stage.
+    int firstStageReduction = 0;
 };
 
 // Crop-window pixels [firstPixel, firstPixel + pixelCount) in row-major order; or, when pilotSamples > 0,
@@ -45,8 +50,9 @@ struct SeedingResult {
     std::vector<SeedCandidate> candidates;  // in pixel, sample, strategy order; zero weights left out
     // Sum of the candidates' weights per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
     std::vector<double> depthLuminance;
-    uint64_t samples = 0;  // BDPT samples taken
-    double lambda = 0;     // the luminance pilot's tuned jump size of the manifold perturbation (0: none)
+    uint64_t samples = 0;        // BDPT samples taken
+    double lambda = 0;           // the luminance pilot's tuned jump size of the manifold perturbation (0: none)
+    FirstStageImage firstStage;  // two-stage MLT: the first stage's sums (render/two_stage.h)
     uint64_t rays = 0;
     double seconds = 0;
 };
@@ -63,6 +69,10 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
 // Seeding, the luminance pilot and burst tasks all take their samples through it.
 void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
                 double scale, bool keep, SeedingResult &result);
+// The strategies seedSample takes from that sample: fn(strategy, weight) for each.
+void forEachSeedStrategy(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel,
+                         uint64_t sampleIndex, double scale,
+                         const std::function<void(const StrategySample &, double)> &fn);
 
 // The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.
 uint64_t filmPixel(const Film &film, uint64_t cropIndex);

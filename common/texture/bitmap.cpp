@@ -1,8 +1,8 @@
 // Mitsuba 0.6's bitmap texture (src/textures/bitmap.cpp with the lookups of include/mitsuba/render/
 // mipmap.h), evaluated at the full resolution.
 //
-// Parameters: filename (PNG, JPEG or OpenEXR), gamma, filterType, maxAnisotropy, cache, wrapMode /
-// wrapModeU / wrapModeV, channel, uoffset, voffset, uscale, vscale.
+// Parameters: filename (PNG, JPEG, BMP, Targa, Radiance RGBE .hdr or OpenEXR), gamma, filterType, maxAnisotropy, cache,
+// wrapMode / wrapModeU / wrapModeV, channel, uoffset, voffset, uscale, vscale.
 //
 // Filtering: Mitsuba pre-filters with EWA or trilinear MIP-mapping when ray differentials are available
 // and otherwise evaluates its full-resolution level bilinearly. pathfarm traces no ray differentials, so
@@ -162,9 +162,9 @@ std::shared_ptr<Object> createBitmapTexture(const Properties &props, const LoadC
         props.fail("channel", "'" + channel + "' is not one of r, g, b (alpha channels are not loaded)");
     const UVMapping map(props);
 
-    // Without `gamma` the file's own encoding applies (readImage: PNG and JPEG are sRGB, EXR linear);
-    // with it, the stored values are decoded with the given curve, EXR included, as Mitsuba's
-    // Bitmap::setGamma does.
+    // Without `gamma` the file's own encoding applies (readImage: PNG, JPEG, BMP and Targa are sRGB, EXR
+    // and Radiance RGBE linear); with it, the stored values are decoded with the given curve, EXR
+    // included, as Mitsuba's Bitmap::setGamma does.
     const bool hasGamma = props.has("gamma");
     const double gamma = props.getFloat("gamma", -1.0);
     if (gamma != -1.0 && !(gamma > 0)) props.fail("gamma", "must be -1 (sRGB) or positive");

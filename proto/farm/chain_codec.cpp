@@ -32,6 +32,30 @@ void forEachRecord(const v1::PathRecords &in, const char *what, const Fn &fn) {
     }
 }
 
+void encodeFirstStage(const FirstStageImage &image, v1::FirstStageImage &out) {
+    out.set_reduction(static_cast<uint32_t>(image.reduction));
+    out.set_width(static_cast<uint32_t>(image.width));
+    out.set_height(static_cast<uint32_t>(image.height));
+    for (const double l : image.luminance) out.add_luminance(l);
+}
+
+FirstStageImage decodeFirstStage(const v1::FirstStageImage &in, const char *what) {
+    FirstStageImage out;
+    if (in.reduction() == 0) return out;
+    const uint64_t cells = static_cast<uint64_t>(in.width()) * in.height();
+    if (in.reduction() > 1 << 16 || in.width() == 0 || in.height() == 0 || in.width() > 1 << 20 ||
+        in.height() > 1 << 20 || static_cast<uint64_t>(in.luminance_size()) != cells)
+        throw FarmError(std::string(what) + ": malformed first-stage image");
+    for (const double l : in.luminance())
+        if (!std::isfinite(l) || l < 0)
+            throw FarmError(std::string(what) + ": a first-stage luminance is negative or not finite");
+    out.reduction = static_cast<int>(in.reduction());
+    out.width = static_cast<int>(in.width());
+    out.height = static_cast<int>(in.height());
+    out.luminance.assign(in.luminance().begin(), in.luminance().end());
+    return out;
+}
+
 std::vector<double> finiteValues(const google::protobuf::RepeatedField<double> &in, const char *what) {
     for (const double v : in)
         if (!std::isfinite(v)) throw FarmError(std::string(what) + ": non-finite luminance");
@@ -94,6 +118,7 @@ v1::ChainTask toProto(const ChainTask &task) {
     out.set_mutations(task.mutations);
     out.set_lambda(task.lambda);
     for (const double l : task.depthLuminance) out.add_depth_luminance(l);
+    if (task.firstStage.enabled()) encodeFirstStage(task.firstStage, *out.mutable_first_stage());
     if (task.burst) {
         v1::BurstPass *b = out.mutable_burst();
         b->set_pass(task.burst->pass);
@@ -116,6 +141,10 @@ ChainTask fromProto(const v1::ChainTask &task) {
     out.depthLuminance = finiteValues(task.depth_luminance(), "chain task");
     if (!std::isfinite(task.lambda()) || task.lambda() < 0) throw FarmError("chain task: a bad jump size lambda");
     out.lambda = task.lambda();
+    out.firstStage = decodeFirstStage(task.first_stage(), "chain task");
+    // The chains divide by it: every cell must be positive (the normalizer floors them).
+    for (const double l : out.firstStage.luminance)
+        if (!(l > 0)) throw FarmError("chain task: a first-stage luminance is not positive");
     if (task.has_burst()) {
         const v1::BurstPass &b = task.burst();
         if (!std::isfinite(b.mean_luminance()) || b.mean_luminance() < 0)
@@ -144,8 +173,12 @@ SeedingTask fromProto(const v1::SeedingTask &task) {
 
 std::string encodeSeedingResult(const SeedingResult &result) {
     v1::SeedingOutput out;
-    for (const SeedCandidate &c : result.candidates) addRecord(*out.mutable_candidates(), c.record, c.weight);
+    for (const SeedCandidate &c : result.candidates) {
+        addRecord(*out.mutable_candidates(), c.record, c.weight);
+        if (result.firstStage.enabled()) out.mutable_candidates()->add_cell(c.cell);
+    }
     for (const double l : result.depthLuminance) out.add_depth_luminance(l);
+    if (result.firstStage.enabled()) encodeFirstStage(result.firstStage, *out.mutable_first_stage());
     out.set_samples(result.samples);
     out.set_lambda(result.lambda);
     out.set_rays(result.rays);
@@ -160,6 +193,17 @@ SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, co
     // of the task's, in order: the normalizer relies on the pool running in pixel order.
     const uint64_t width = static_cast<uint64_t>(film.width());
     uint64_t previous = task.firstPixel;
+    out.firstStage = decodeFirstStage(in.first_stage(), "seeding result");
+    if (out.firstStage.enabled()) {
+        const FirstStageImage expected = FirstStageImage::zero(film, out.firstStage.reduction);
+        if (out.firstStage.width != expected.width || out.firstStage.height != expected.height)
+            throw FarmError("seeding result: the first-stage image does not cover the film");
+    }
+    const int cells = in.candidates().cell_size();
+    if (cells != (out.firstStage.enabled() ? in.candidates().pixel_size() : 0))
+        throw FarmError("seeding result: first-stage cells do not match the candidates");
+    for (const uint32_t c : in.candidates().cell())
+        if (c >= out.firstStage.luminance.size()) throw FarmError("seeding result: a first-stage cell out of range");
     forEachRecord(in.candidates(), "seeding result", [&](const PathRecord &r, double weight) {
         const int64_t x = static_cast<int64_t>(r.pixel % width) - film.cropX(),
                       y = static_cast<int64_t>(r.pixel / width) - film.cropY();
@@ -169,7 +213,8 @@ SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, co
             crop >= task.firstPixel + task.pixelCount)
             throw FarmError("seeding result: a candidate's pixel lies outside the task or out of order");
         previous = crop;
-        out.candidates.push_back({r, weight});
+        const size_t i = out.candidates.size();
+        out.candidates.push_back({r, weight, cells > 0 ? in.candidates().cell(static_cast<int>(i)) : 0u});
     });
     out.depthLuminance = finiteValues(in.depth_luminance(), "seeding result");
     if (!std::isfinite(in.lambda()) || in.lambda() < 0) throw FarmError("seeding result: a bad jump size lambda");
