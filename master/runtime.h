@@ -85,6 +85,7 @@ struct Master::JobFilm {
     int64_t previewMerged = 0;
     Clock::time_point lastPreview;
     Clock::duration checkpointCost{};  // of the last checkpoint
+    std::string storageFault;          // the last failed write of this film's files, logged once
 };
 
 struct Master::JobRuntime {

@@ -101,7 +101,13 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
         *spec.mutable_job() = j.record.spec();
         spec.set_scene_file(j.record.scene_file());
         const int64_t now = unixMs();
-        const int64_t attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
+        int64_t attempt = 0;
+        try {
+            attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
+        } catch (const StorageError &) {
+            j.retry.insert(*index);  // not leased: the next request takes it again
+            throw;
+        }
         spec.set_attempt_id(attempt);
         t.state = TaskRuntime::State::Leased;
         t.attempt = attempt;
@@ -253,6 +259,26 @@ std::string Master::checkAttempt(const std::string &worker, int64_t attempt) con
     return "unknown attempt " + std::to_string(attempt);
 }
 
+void Master::expire(Clock::time_point now) {
+    for (auto it = leases_.begin(); it != leases_.end();) {
+        const auto [attempt, lease] = *it++;
+        if (lease.deadline > now) continue;
+        JobRuntime &j = *jobs_.at(lease.job);
+        spdlog::warn("job={} task={} attempt={} worker={}: lease expired", lease.job, lease.task, attempt,
+                     lease.worker);
+        requeue(j, lease.task, lease.worker, attempt_state::kExpired, "lease expired (no heartbeat)", attempt);
+        ++j.expiredAttempts;
+        ++counters_.attemptsExpired;
+    }
+    for (auto &[id, w] : workers_)
+        if (w->info.state() != v1::WORKER_LOST && now - w->lastSeen > cfg_.leaseTime) {
+            w->info.set_state(v1::WORKER_LOST);
+            spdlog::warn("worker={}: lost (no contact for {} ms)", id, cfg_.leaseTime.count());
+            touch();
+            store_.saveWorker(w->info);
+        }
+}
+
 void Master::reaperLoop() {
     const auto period = std::clamp<std::chrono::milliseconds>(cfg_.leaseTime / 10, std::chrono::milliseconds(20),
                                                               std::chrono::milliseconds(500));
@@ -260,24 +286,12 @@ void Master::reaperLoop() {
     while (!stopping_) {
         workChanged_.wait_for(lock, period);
         if (stopping_) break;
-        const auto now = Clock::now();
-        for (auto it = leases_.begin(); it != leases_.end();) {
-            const auto [attempt, lease] = *it++;
-            if (lease.deadline > now) continue;
-            JobRuntime &j = *jobs_.at(lease.job);
-            spdlog::warn("job={} task={} attempt={} worker={}: lease expired", lease.job, lease.task, attempt,
-                         lease.worker);
-            ++j.expiredAttempts;
-            ++counters_.attemptsExpired;
-            requeue(j, lease.task, lease.worker, attempt_state::kExpired, "lease expired (no heartbeat)", attempt);
+        try {
+            expire(Clock::now());
+        } catch (const StorageError &e) {
+            // A full disk: what could not be recorded is expired again next period.
+            spdlog::error("reaper: {}", e.what());
         }
-        for (auto &[id, w] : workers_)
-            if (w->info.state() != v1::WORKER_LOST && now - w->lastSeen > cfg_.leaseTime) {
-                w->info.set_state(v1::WORKER_LOST);
-                store_.saveWorker(w->info);
-                spdlog::warn("worker={}: lost (no contact for {} ms)", id, cfg_.leaseTime.count());
-                touch();
-            }
         std::vector<JobRuntime *> complete, ended;
         for (auto &[id, j] : jobs_) {
             if (!isActive(j->record.state())) {
