@@ -198,6 +198,7 @@ void Master::recoverJob(const StoredJob &stored) {
         TaskRuntime &t = j.tasks.at(static_cast<size_t>(a.taskIndex));
         t.attempt = a.id;
         j.attemptTask[a.id] = a.taskIndex;
+        j.attemptWorker[a.id] = a.workerId;
         if (a.state == attempt_state::kFailed || a.state == attempt_state::kExpired) {
             ++j.failuresByWorker[a.workerId];
             (a.state == attempt_state::kFailed ? j.failedAttempts : j.expiredAttempts)++;

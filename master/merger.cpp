@@ -63,8 +63,9 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
     try {
         output.emplace(decodeOutput(*j, work, payload));
     } catch (const farm::FarmError &e) {
-        fail(worker, attempt, std::string("corrupt result: ") + e.what());
-        throw;
+        const std::string why = std::string("corrupt result: ") + e.what();
+        fail(worker, attempt, why);
+        throw farm::FarmError(why);
     }
     const double decodeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
     const fs::path file =

@@ -112,6 +112,7 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
         t.state = TaskRuntime::State::Leased;
         t.attempt = attempt;
         j.attemptTask[attempt] = *index;
+        j.attemptWorker[attempt] = w.info.id();
         leases_[attempt] = {j.record.id(), *index, w.info.id(), Clock::now() + cfg_.leaseTime};
         w.attempts.insert(attempt);
         if (j.record.state() == v1::JOB_QUEUED) {
@@ -247,13 +248,13 @@ std::string Master::checkAttempt(const std::string &worker, int64_t attempt) con
     for (const auto &[id, j] : jobs_) {
         const auto a = j->attemptTask.find(attempt);
         if (a == j->attemptTask.end()) continue;
+        if (j->attemptWorker.at(attempt) != worker)
+            return "attempt " + std::to_string(attempt) + " was not leased to worker '" + worker.substr(0, 64) + "'";
         const TaskRuntime &t = j->tasks[static_cast<size_t>(a->second)];
         if (t.attempt != attempt || t.state == TaskRuntime::State::Accepted || t.state == TaskRuntime::State::Merged)
             return "superseded: task " + std::to_string(a->second) + " was given to another attempt";
         if (!isActive(j->record.state()))
             return "job " + std::to_string(id) + " is " + farm::stateName(j->record.state());
-        const auto l = leases_.find(attempt);
-        if (l != leases_.end() && l->second.worker != worker) return "attempt belongs to another worker";
         return "";
     }
     return "unknown attempt " + std::to_string(attempt);
