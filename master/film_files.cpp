@@ -49,9 +49,12 @@ void writeFilmFile(const std::string &path, std::string_view data, bool durable)
     if (fd < 0) storageFailure("cannot create", tmp, errno);
     writeAll(fd, tmp, data);
     writeAll(fd, tmp, std::string(kTag) + farm::hashHex64(data));
-    // A full disk may only show at fsync or close (delayed allocation).
-    if ((durable && ::fsync(fd) != 0) | (::close(fd) != 0)) {
-        const int err = errno;
+    // A full disk may only show at fsync or close (delayed allocation); the descriptor is closed either way.
+    const bool synced = !durable || ::fsync(fd) == 0;
+    const int syncError = errno;
+    const bool closed = ::close(fd) == 0;
+    if (!synced || !closed) {
+        const int err = synced ? errno : syncError;
         ::unlink(tmp.c_str());
         storageFailure("cannot write", tmp, err);
     }
