@@ -21,7 +21,23 @@ void writeFixture() {
     put("spectra/flat.spd", "400 0.5\n500 0.6\n600 0.7\n700 0.8\n");
 }
 
+// A scene that uses every file of the fixture: the included part, the mesh, the spectrum file, a
+// <default> and the defines.
+std::vector<std::string> seeds() {
+    return {R"(<scene version="0.5.0"><default name="res" value="16"/>
+<integrator type="path"><integer name="maxDepth" value="3"/></integrator>
+<sensor type="perspective"><transform name="toWorld"><lookat origin="0, 1, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+<sampler type="independent"><integer name="sampleCount" value="$spp"/></sampler>
+<film type="hdrfilm"><integer name="width" value="$res"/><integer name="height" value="$res"/></film></sensor>
+<include filename="parts/light.xml"/>
+<shape type="obj"><string name="filename" value="meshes/floor.obj"/>
+<bsdf type="diffuse"><spectrum name="reflectance" filename="spectra/flat.spd"/></bsdf></shape>
+</scene>)"};
+}
+
 }  // namespace
+
+PATHFARM_FUZZ_SEEDS(seeds)
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     writeFixture();

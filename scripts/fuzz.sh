@@ -45,7 +45,7 @@ for t in $TARGETS; do
   corpus="$BUILD/corpus/$t"
   mkdir -p "$corpus" "fuzz/corpus/$t"
   seed "$t" "$corpus"
-  PATHFARM_FUZZ_SEEDS="$corpus" "$bin" > /dev/null 2>&1 || true
+  PATHFARM_FUZZ_SEEDS="$corpus" "$bin" -runs=0 > /dev/null 2>&1 || true
   log="$BUILD/$t.log"
   # The regression inputs first, once each: a fixed finding must stay fixed.
   if compgen -G "fuzz/corpus/$t/*" > /dev/null; then
@@ -56,8 +56,8 @@ for t in $TARGETS; do
       -artifact_prefix="$BUILD/artifacts/$t-" "$corpus" "fuzz/corpus/$t" > "$log" 2>&1; then
     tail -60 "$log"; echo "$t: FAILED (log: $log)" >&2; exit 1
   fi
-  execs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
-  rate=$(grep -o 'stat::average_exec_per_sec: [0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
   cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo 0)
   ft=$(grep -o 'ft: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*$' || echo 0)
   printf '%-22s %10s %8s %8s %8s %s\n' "$t" "$execs" "$rate" "$cov" "$ft" "$(ls "$corpus" | wc -l)"
