@@ -21,6 +21,8 @@ esac
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 mkdir -p "$BUILD/artifacts"
+# The targets write their inputs as files (fuzz/fuzz_util.h): into a directory of the build, emptied per target.
+export TMPDIR="$PWD/$BUILD/tmp"
 
 # Seeds from the repository: the files whose format the target reads, with its selector byte.
 seed() {  # seed TARGET CORPUS
@@ -42,6 +44,7 @@ printf '%-22s %10s %8s %8s %8s %s\n' target executions exec/s cov ft corpus
 for t in $TARGETS; do
   bin="$BUILD/$t"
   [ -x "$bin" ] || { echo "$bin is not built (make fuzz builds it)" >&2; exit 1; }
+  rm -rf "$TMPDIR" && mkdir -p "$TMPDIR"
   corpus="$BUILD/corpus/$t"
   mkdir -p "$corpus" "fuzz/corpus/$t"
   seed "$t" "$corpus"
