@@ -14,7 +14,7 @@
 #include "farm/block_codec.h"
 #include "farm/chain_codec.h"
 #include "farm/error.h"
-#include "farm/rpc.h"
+#include "film_files.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -144,10 +144,10 @@ void Master::restoreChainFilm(JobRuntime &j, const StoredJob &stored) {
     ChainJob &job = *j.film.chain->job;
     for (const StoredResult &r : store_.loadResults(j.record.id(), std::min(stored.mergedTasks, j.seedingTasks)))
         job.mergeSeeding(std::get<SeedingResult>(
-            decodeOutput(j, chainTaskWork(job, static_cast<uint64_t>(r.taskIndex)), farm::readFile(r.file))));
+            decodeOutput(j, chainTaskWork(job, static_cast<uint64_t>(r.taskIndex)), readFilmFile(r.file))));
     if (stored.checkpoint.empty()) return;
     v1::ChainCheckpoint cp;
-    if (!cp.ParseFromString(farm::readFile(stored.checkpoint)))
+    if (!cp.ParseFromString(readFilmFile(stored.checkpoint)))
         throw farm::FarmError("corrupt checkpoint " + stored.checkpoint);
     ImageBlock direct = makeFilmBlock(job.scene());
     farm::decodeBlock(cp.direct(), direct);

@@ -27,6 +27,8 @@ std::string toJson(const google::protobuf::Message &m) {
     return json;
 }
 
+constexpr size_t kHttpThreads = 64;
+
 }  // namespace
 
 HttpStatus::HttpStatus(Master &master, const std::string &listen)
@@ -80,6 +82,14 @@ HttpStatus::HttpStatus(Master &master, const std::string &listen)
         res.set_content(toJson(reply), "application/json");
     });
     // Everything here changes as the farm runs: no cache may answer for the master.
+    // A connection holds one of the pool's threads until its request is read: slow or silent clients
+    // (slowloris) would otherwise take httplib's default of 8 threads for 5 s each and stall the status
+    // pages for everyone (tests/test_farm_hostile.cpp). Idle threads cost only their stacks.
+    s.new_task_queue = [] { return new httplib::ThreadPool(kHttpThreads); };
+    s.set_read_timeout(2, 0);
+    s.set_write_timeout(5, 0);
+    s.set_keep_alive_timeout(2);
+    s.set_payload_max_length(1 << 20);  // the status pages take no bodies; a large one is refused (413)
     s.set_post_routing_handler(
         [](const httplib::Request &, httplib::Response &res) { res.set_header("Cache-Control", "no-store"); });
     s.set_exception_handler([](const httplib::Request &req, httplib::Response &res, std::exception_ptr ep) {

@@ -12,7 +12,8 @@
 #include "farm/convert.h"
 #include "farm/error.h"
 #include "farm/job_setup.h"
-#include "farm/rpc.h"
+#include "film_files.h"
+#include "job_spec_check.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -26,31 +27,6 @@ namespace {
 std::string relativeTo(const std::string &root, std::string msg) {
     for (size_t at; (at = msg.find(root)) != std::string::npos;) msg.erase(at, root.size());
     return msg;
-}
-
-// Rejects what no scene or integrator could make sense of, before anything is loaded.
-void checkSpec(const JobSpec &spec, const MasterConfig &cfg) {
-    constexpr int kMaxParams = 256;
-    constexpr size_t kMaxText = 4096;
-    if (spec.bundle_hash().empty()) throw farm::FarmError("job spec: bundle_hash is missing (upload the scene first)");
-    if (spec.params_size() > kMaxParams || spec.defines_size() > kMaxParams)
-        throw farm::FarmError("job spec: more than " + std::to_string(kMaxParams) + " parameters or definitions");
-    for (const auto *list : {&spec.params(), &spec.defines()})
-        for (const auto &p : *list)
-            if (p.name().empty() || p.name().size() > kMaxText || p.value().size() > kMaxText)
-                throw farm::FarmError("job spec: parameter '" + p.name().substr(0, 64) +
-                                      "' has an empty or overlong name or value");
-    if (spec.integrator().size() > kMaxText || spec.label().size() > kMaxText)
-        throw farm::FarmError("job spec: overlong integrator name or label");
-    if (spec.budget().has_spp() && (spec.budget().spp() < 1 || spec.budget().spp() > cfg.maxSpp))
-        throw farm::FarmError("job spec: spp must be in [1, " + std::to_string(cfg.maxSpp) + "], got " +
-                              std::to_string(spec.budget().spp()));
-    if (spec.budget().has_time_seconds()) {
-        const double t = spec.budget().time_seconds();
-        if (!std::isfinite(t) || t <= 0 || t > cfg.maxTimeSeconds)
-            throw farm::FarmError("job spec: time budget must be in (0, " + std::to_string(cfg.maxTimeSeconds) +
-                                  "] seconds, got " + std::to_string(t));
-    }
 }
 
 }  // namespace
@@ -110,7 +86,7 @@ void Master::openFilm(JobRuntime &j, Loaded loaded) {
 }
 
 v1::Job Master::submit(const JobSpec &spec) {
-    checkSpec(spec, cfg_);
+    checkJobSpec(spec, cfg_);
     auto j = std::make_unique<JobRuntime>();
     *j->record.mutable_spec() = spec;
     openFilm(*j, load(spec, j->record));
@@ -166,23 +142,41 @@ void Master::recoverJob(const StoredJob &stored) {
     const int64_t id = j.record.id();
     jobs_.emplace(id, std::move(owned));
     j.total = j.record.tasks().total();
+    StoredJob film = stored;  // what the film resumes from
     try {
         v1::Job reloaded = j.record;
         openFilm(j, load(j.record.spec(), reloaded));
-        if (j.chain) {
-            restoreChainFilm(j, stored);
-        } else if (!stored.checkpoint.empty()) {
-            farm::decodeBlock(farm::readFile(stored.checkpoint), *j.film.block);
+        try {
+            restoreFilm(j, film);
+        } catch (const farm::FarmError &e) {
+            // The checkpoint (or a chain job's seeding) is unreadable or damaged: every task merged into it
+            // is rendered again (tasks are reproducible), into a fresh film.
+            spdlog::warn("job={}: its film cannot be restored ({}): rendering its {} merged tasks again", id, e.what(),
+                         film.mergedTasks);
+            std::error_code ec;
+            for (const std::string &file : store_.rewindJob(id)) fs::remove(file, ec);
+            if (!film.checkpoint.empty()) fs::remove(film.checkpoint, ec);
+            film.mergedTasks = 0;
+            film.checkpoint.clear();
+            for (auto *r : {&j.record, &reloaded}) {
+                r->mutable_tasks()->set_merged(0);
+                r->set_samples_per_pixel(0);
+                r->set_samples(0);
+                r->set_rays(0);
+                r->clear_chain();
+            }
+            openFilm(j, load(j.record.spec(), reloaded));
         }
     } catch (const std::exception &e) {
+        // What cannot be rebuilt: the bundle is gone, the scene no longer loads, the store fails.
         spdlog::error("job={}: cannot resume after a restart: {}", id, e.what());
         j.film.block.reset();
         j.film.chain.reset();
         setState(j, v1::JOB_FAILED, std::string("cannot resume after a restart: ") + e.what());
         return;
     }
-    j.film.merged = j.film.checkpointed = stored.mergedTasks;
-    j.film.checkpointFile = stored.checkpoint;
+    j.film.merged = j.film.checkpointed = film.mergedTasks;
+    j.film.checkpointFile = film.checkpoint;
     j.film.spp = j.record.samples_per_pixel();
 
     for (const StoredTask &t : store_.loadTasks(id)) {
@@ -204,6 +198,7 @@ void Master::recoverJob(const StoredJob &stored) {
         TaskRuntime &t = j.tasks.at(static_cast<size_t>(a.taskIndex));
         t.attempt = a.id;
         j.attemptTask[a.id] = a.taskIndex;
+        j.attemptWorker[a.id] = a.workerId;
         if (a.state == attempt_state::kFailed || a.state == attempt_state::kExpired) {
             ++j.failuresByWorker[a.workerId];
             (a.state == attempt_state::kFailed ? j.failedAttempts : j.expiredAttempts)++;
@@ -236,6 +231,14 @@ void Master::recoverJob(const StoredJob &stored) {
     // No other thread runs yet; the film mutex is taken for the locking discipline of mergeReady.
     const std::lock_guard<std::mutex> lock(j.film.mu);
     mergeReady(j, std::nullopt);
+}
+
+void Master::restoreFilm(JobRuntime &j, const StoredJob &stored) {
+    if (j.chain) {
+        restoreChainFilm(j, stored);
+    } else if (!stored.checkpoint.empty()) {
+        farm::decodeBlock(readFilmFile(stored.checkpoint), *j.film.block);
+    }
 }
 
 v1::Job Master::snapshot(const JobRuntime &j) const {

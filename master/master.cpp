@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "farm/convert.h"
+#include "film_files.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -14,7 +15,8 @@ namespace v1 = pathfarm::v1;
 
 Master::Master(MasterConfig config)
     : cfg_(std::move(config)),
-      bundles_((fs::create_directories(cfg_.dataDir), (fs::path(cfg_.dataDir) / "bundles").string()),
+      bundles_((fs::create_directories(cfg_.dataDir), checkWritable(cfg_.dataDir),
+                (fs::path(cfg_.dataDir) / "bundles").string()),
                cfg_.maxBundleBytes),
       store_((fs::path(cfg_.dataDir) / "store.sqlite").string()) {
     recover();

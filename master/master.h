@@ -73,6 +73,7 @@ struct MasterMetrics {
     double mergeSeconds = 0;       // decoding and merging those results
     uint64_t resultBytes = 0;      // their payloads on the wire
     int64_t lateResultsIgnored = 0;
+    int64_t resultsLost = 0;  // stored results unreadable or failing their checksum, rendered again
     int64_t attemptsExpired = 0, attemptsFailed = 0;
 };
 
@@ -161,12 +162,17 @@ private:
     Loaded load(const JobSpec &spec, pathfarm::v1::Job &record) const;
     // Sets up the job's film side (the merged film, or the ChainJob) from what load() returned.
     void openFilm(JobRuntime &j, Loaded loaded);
+    // After a restart: the opened film as the stored checkpoint has it. Throws farm::FarmError when the
+    // checkpoint or a file it depends on is unreadable or damaged.
+    void restoreFilm(JobRuntime &j, const StoredJob &stored);
     // Under mu_.
     pathfarm::v1::Job snapshot(const JobRuntime &j) const;
     void setState(JobRuntime &j, pathfarm::v1::JobState state, const std::string &error = "");
 
     // ---- scheduler.cpp ----
     void reaperLoop();
+    // Under mu_: expires the leases and marks lost the workers whose time ran out by `now`.
+    void expire(Clock::time_point now);
     // Under mu_.
     std::optional<pathfarm::v1::TaskSpec> pickTask(WorkerRuntime &w);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
@@ -183,8 +189,14 @@ private:
     // Film side: called with the job's film mutex held.
     void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh);
     void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
+    // The pending result of `task` is lost: the task goes back to the queue (takes mu_).
+    void discardResult(JobRuntime &j, int64_t task, const std::string &file);
+    // Logs a failed write of the job's film files once per distinct fault.
+    void storageFault(JobRuntime &j, const char *what, const std::exception &e);
+    // Throws StorageError.
     void checkpoint(JobRuntime &j);
     void finishIfComplete(JobRuntime &j);
+    void writeFinalImage(JobRuntime &j, double seconds);
     void closeFilm(JobRuntime &j);
     Bitmap develop(const JobRuntime &j) const;
 

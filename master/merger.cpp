@@ -6,47 +6,23 @@
 // job holds. preview() and image() develop the film on request.
 // Locking: a result is decoded and written with no lock held; the merge holds the job's film mutex and
 // takes mu_ only for the short updates of the job's record and the counters (film mutex before mu_).
-#include <fcntl.h>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
 
+#include "core/error.h"
 #include "farm/block_codec.h"
 #include "farm/chain_codec.h"
 #include "farm/error.h"
 #include "farm/rpc.h"
+#include "film_files.h"
 #include "runtime.h"
 
 namespace pf::master {
 
 namespace fs = std::filesystem;
 namespace v1 = pathfarm::v1;
-
-namespace {
-
-// Writes `data` to `path` through a temporary file and a rename, so that a reader (or a restarted
-// master) sees either nothing or the whole file. With `durable` the data reaches the disk before the
-// rename, for files that committed rows will name.
-void writeFileAtomic(const fs::path &path, std::string_view data, bool durable) {
-    const fs::path tmp = path.string() + ".tmp";
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error("cannot write " + tmp.string());
-    for (size_t done = 0; done < data.size();) {
-        const ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            ::close(fd);
-            throw std::runtime_error("cannot write " + tmp.string());
-        }
-        done += static_cast<size_t>(n);
-    }
-    if ((durable && ::fsync(fd) != 0) | (::close(fd) != 0)) throw std::runtime_error("cannot write " + tmp.string());
-    fs::rename(tmp, path);
-}
-
-}  // namespace
 
 uint64_t Master::maxPayloadBytes(int64_t attempt) const {
     const std::lock_guard<std::mutex> lock(mu_);
@@ -87,13 +63,15 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
     try {
         output.emplace(decodeOutput(*j, work, payload));
     } catch (const farm::FarmError &e) {
-        fail(worker, attempt, std::string("corrupt result: ") + e.what());
-        throw;
+        const std::string why = std::string("corrupt result: ") + e.what();
+        fail(worker, attempt, why);
+        throw farm::FarmError(why);
     }
     const double decodeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
     const fs::path file =
         fs::path(jobDir(jobId)) / "results" / (std::to_string(task) + "-" + std::to_string(attempt) + ".blk");
-    writeFileAtomic(file, payload, false);
+    // A full disk throws StorageError: the worker keeps its lease and retries the upload.
+    writeFilmFile(file.string(), payload, false);
 
     bool accepted = false;
     {
@@ -104,7 +82,13 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
             t.state == TaskRuntime::State::Merged) {
             fs::remove(file);
         } else {
-            store_.acceptResult(jobId, task, attempt, file.string(), payload.size(), stats, unixMs());
+            try {
+                store_.acceptResult(jobId, task, attempt, file.string(), payload.size(), stats, unixMs());
+            } catch (const StorageError &) {
+                std::error_code ec;
+                fs::remove(file, ec);
+                throw;
+            }
             t.state = TaskRuntime::State::Accepted;
             accepted = true;
             leases_.erase(attempt);
@@ -174,16 +158,22 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
         const auto t0 = Clock::now();
         const v1::TaskSpec &work = it->second.work;
-        try {
-            mergeOutput(j, work,
-                        fresh && fresh->first == f.merged ? std::move(fresh->second)
-                                                          : decodeOutput(j, work, farm::readFile(it->second.file)));
-        } catch (const std::exception &e) {
-            // The master's own file is unreadable: the disk failed, and the job cannot be exact.
-            const std::lock_guard<std::mutex> lock(mu_);
-            setState(j, v1::JOB_FAILED, "stored result of task " + std::to_string(f.merged) + ": " + e.what());
-            return;
+        std::optional<TaskOutput> output;
+        if (fresh && fresh->first == f.merged) {
+            output.emplace(std::move(fresh->second));
+        } else {
+            try {
+                output.emplace(decodeOutput(j, work, readFilmFile(it->second.file)));
+            } catch (const farm::FarmError &e) {
+                // The master's own file is unreadable, truncated or damaged; the task is reproducible.
+                spdlog::warn("job={} task={}: stored result lost ({}): rendering the task again", j.record.id(),
+                             f.merged, e.what());
+                discardResult(j, f.merged, it->second.file);
+                f.pending.erase(it);
+                continue;
+            }
         }
+        mergeOutput(j, work, std::move(*output));
         seconds += std::chrono::duration<double>(Clock::now() - t0).count();
         (work.has_seeding()                          ? seedingSamples
          : work.has_chain()                          ? mutations
@@ -225,8 +215,34 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     if (complete) {
         finishIfComplete(j);
     } else if (now - f.lastCheckpoint >= checkpointDue) {
-        checkpoint(j);
+        try {
+            checkpoint(j);
+        } catch (const StorageError &e) {
+            // The results stay on disk until a later checkpoint succeeds.
+            storageFault(j, "checkpoint", e);
+            f.lastCheckpoint = now;
+        }
     }
+}
+
+void Master::discardResult(JobRuntime &j, int64_t task, const std::string &file) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    store_.discardResult(j.record.id(), task);
+    std::error_code ec;
+    fs::remove(file, ec);
+    j.tasks[static_cast<size_t>(task)].state = TaskRuntime::State::Pending;
+    j.retry.insert(task);
+    ++counters_.resultsLost;
+    touch();
+    workChanged_.notify_all();
+}
+
+void Master::storageFault(JobRuntime &j, const char *what, const std::exception &e) {
+    // Logged once per distinct fault: the reaper retries a job's final image every period.
+    if (j.film.storageFault == e.what()) return;
+    j.film.storageFault = e.what();
+    spdlog::error("job={}: cannot write its {}: {} (retrying until the data directory has room again)", j.record.id(),
+                  what, e.what());
 }
 
 void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput output) {
@@ -244,7 +260,7 @@ void Master::checkpoint(JobRuntime &j) {
     if (f.merged == f.checkpointed) return;
     const auto start = Clock::now();
     const fs::path file = fs::path(jobDir(j.record.id())) / ("checkpoint-" + std::to_string(f.merged) + ".blk");
-    writeFileAtomic(file, f.chain ? chainCheckpoint(*f.chain->job) : farm::encodeBlock(*f.block), true);
+    writeFilmFile(file.string(), f.chain ? chainCheckpoint(*f.chain->job) : farm::encodeBlock(*f.block), true);
     v1::Job record;
     {
         const std::lock_guard<std::mutex> lock(mu_);
@@ -272,7 +288,26 @@ void Master::finishIfComplete(JobRuntime &j) {
     // The job's true time ends with its last merge, before the I/O of finishing it.
     const int64_t endMs = unixMs();
     const double seconds = (endMs - j.record.started_unix_ms()) / 1000.0;
-    checkpoint(j);
+    // The job is done once its last checkpoint (which records every merge in the store) and its image are
+    // written; on a full disk it stays complete but running, and the reaper tries again.
+    try {
+        checkpoint(j);
+        writeFinalImage(j, seconds);
+    } catch (const StorageError &e) {
+        storageFault(j, "checkpoint", e);
+        return;
+    } catch (const SceneError &e) {  // writeEXR's errors
+        storageFault(j, "final image", e);
+        return;
+    }
+    const std::lock_guard<std::mutex> lock(mu_);
+    j.record.set_finished_unix_ms(endMs);
+    setState(j, v1::JOB_DONE);
+    spdlog::info("job={}: {} tasks, {} spp in {:.2f} s", j.record.id(), f.merged, f.spp, j.record.render_seconds());
+}
+
+void Master::writeFinalImage(JobRuntime &j, double seconds) {
+    JobFilm &f = j.film;
     Bitmap image = develop(j);
     const JobSpec &spec = j.record.spec();
     image.metadata["pathfarm.integrator"] = j.record.integrator();
@@ -290,10 +325,6 @@ void Master::finishIfComplete(JobRuntime &j) {
     writeEXR((fs::path(jobDir(j.record.id())) / "image.exr").string(), image);
     f.preview = std::make_shared<const Bitmap>(std::move(image));
     f.previewMerged = f.merged;
-    const std::lock_guard<std::mutex> lock(mu_);
-    j.record.set_finished_unix_ms(endMs);
-    setState(j, v1::JOB_DONE);
-    spdlog::info("job={}: {} tasks, {} spp in {:.2f} s", j.record.id(), f.merged, f.spp, j.record.render_seconds());
 }
 
 void Master::closeFilm(JobRuntime &j) {
@@ -305,7 +336,12 @@ void Master::closeFilm(JobRuntime &j) {
     if (f.merged > 0 && !fs::exists(image, ec)) {
         f.preview = std::make_shared<const Bitmap>(develop(j));
         f.previewMerged = f.merged;
-        writeEXR(image.string(), *f.preview);
+        try {
+            writeEXR(image.string(), *f.preview);
+        } catch (const SceneError &e) {
+            // Still served from memory (preview) until the master restarts.
+            spdlog::error("job={}: cannot write the image it got to: {}", j.record.id(), e.what());
+        }
     }
     f.block.reset();
     f.chain.reset();

@@ -90,6 +90,9 @@ void farmWide(Exposition &e, const MasterMetrics &m, const std::vector<v1::Job> 
     e.sample("pathfarm_result_bytes_total", {}, static_cast<double>(m.resultBytes));
     e.family("pathfarm_late_results_ignored_total", "counter", "Results of superseded attempts that were ignored.");
     e.sample("pathfarm_late_results_ignored_total", {}, static_cast<double>(m.lateResultsIgnored));
+    e.family("pathfarm_results_lost_total", "counter",
+             "Stored results that were unreadable or failed their checksum, and were rendered again.");
+    e.sample("pathfarm_results_lost_total", {}, static_cast<double>(m.resultsLost));
     e.family("pathfarm_attempts_ended_total", "counter", "Attempts that ended without a result.");
     e.sample("pathfarm_attempts_ended_total", {{"reason", "expired"}}, static_cast<double>(m.attemptsExpired));
     e.sample("pathfarm_attempts_ended_total", {{"reason", "failed"}}, static_cast<double>(m.attemptsFailed));

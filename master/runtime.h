@@ -85,6 +85,7 @@ struct Master::JobFilm {
     int64_t previewMerged = 0;
     Clock::time_point lastPreview;
     Clock::duration checkpointCost{};  // of the last checkpoint
+    std::string storageFault;          // the last failed write of this film's files, logged once
 };
 
 struct Master::JobRuntime {
@@ -105,6 +106,9 @@ struct Master::JobRuntime {
     int64_t passStartMs = 0;  // when the last pass's first task was issued (0: not since the start)
     int64_t failedAttempts = 0, expiredAttempts = 0;
     std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task
+    // Every attempt -> the worker it was leased to: only that worker's result is taken, also after the
+    // lease expired (a worker cannot deliver for a task it never leased).
+    std::map<int64_t, std::string> attemptWorker;
     bool filmOpen = false;                   // the film still holds memory or result files to release once the job ends
     JobFilm film;
 };

@@ -101,11 +101,18 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
         *spec.mutable_job() = j.record.spec();
         spec.set_scene_file(j.record.scene_file());
         const int64_t now = unixMs();
-        const int64_t attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
+        int64_t attempt = 0;
+        try {
+            attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
+        } catch (const StorageError &) {
+            j.retry.insert(*index);  // not leased: the next request takes it again
+            throw;
+        }
         spec.set_attempt_id(attempt);
         t.state = TaskRuntime::State::Leased;
         t.attempt = attempt;
         j.attemptTask[attempt] = *index;
+        j.attemptWorker[attempt] = w.info.id();
         leases_[attempt] = {j.record.id(), *index, w.info.id(), Clock::now() + cfg_.leaseTime};
         w.attempts.insert(attempt);
         if (j.record.state() == v1::JOB_QUEUED) {
@@ -241,16 +248,36 @@ std::string Master::checkAttempt(const std::string &worker, int64_t attempt) con
     for (const auto &[id, j] : jobs_) {
         const auto a = j->attemptTask.find(attempt);
         if (a == j->attemptTask.end()) continue;
+        if (j->attemptWorker.at(attempt) != worker)
+            return "attempt " + std::to_string(attempt) + " was not leased to worker '" + worker.substr(0, 64) + "'";
         const TaskRuntime &t = j->tasks[static_cast<size_t>(a->second)];
         if (t.attempt != attempt || t.state == TaskRuntime::State::Accepted || t.state == TaskRuntime::State::Merged)
             return "superseded: task " + std::to_string(a->second) + " was given to another attempt";
         if (!isActive(j->record.state()))
             return "job " + std::to_string(id) + " is " + farm::stateName(j->record.state());
-        const auto l = leases_.find(attempt);
-        if (l != leases_.end() && l->second.worker != worker) return "attempt belongs to another worker";
         return "";
     }
     return "unknown attempt " + std::to_string(attempt);
+}
+
+void Master::expire(Clock::time_point now) {
+    for (auto it = leases_.begin(); it != leases_.end();) {
+        const auto [attempt, lease] = *it++;
+        if (lease.deadline > now) continue;
+        JobRuntime &j = *jobs_.at(lease.job);
+        spdlog::warn("job={} task={} attempt={} worker={}: lease expired", lease.job, lease.task, attempt,
+                     lease.worker);
+        requeue(j, lease.task, lease.worker, attempt_state::kExpired, "lease expired (no heartbeat)", attempt);
+        ++j.expiredAttempts;
+        ++counters_.attemptsExpired;
+    }
+    for (auto &[id, w] : workers_)
+        if (w->info.state() != v1::WORKER_LOST && now - w->lastSeen > cfg_.leaseTime) {
+            w->info.set_state(v1::WORKER_LOST);
+            spdlog::warn("worker={}: lost (no contact for {} ms)", id, cfg_.leaseTime.count());
+            touch();
+            store_.saveWorker(w->info);
+        }
 }
 
 void Master::reaperLoop() {
@@ -260,24 +287,12 @@ void Master::reaperLoop() {
     while (!stopping_) {
         workChanged_.wait_for(lock, period);
         if (stopping_) break;
-        const auto now = Clock::now();
-        for (auto it = leases_.begin(); it != leases_.end();) {
-            const auto [attempt, lease] = *it++;
-            if (lease.deadline > now) continue;
-            JobRuntime &j = *jobs_.at(lease.job);
-            spdlog::warn("job={} task={} attempt={} worker={}: lease expired", lease.job, lease.task, attempt,
-                         lease.worker);
-            ++j.expiredAttempts;
-            ++counters_.attemptsExpired;
-            requeue(j, lease.task, lease.worker, attempt_state::kExpired, "lease expired (no heartbeat)", attempt);
+        try {
+            expire(Clock::now());
+        } catch (const StorageError &e) {
+            // A full disk: what could not be recorded is expired again next period.
+            spdlog::error("reaper: {}", e.what());
         }
-        for (auto &[id, w] : workers_)
-            if (w->info.state() != v1::WORKER_LOST && now - w->lastSeen > cfg_.leaseTime) {
-                w->info.set_state(v1::WORKER_LOST);
-                store_.saveWorker(w->info);
-                spdlog::warn("worker={}: lost (no contact for {} ms)", id, cfg_.leaseTime.count());
-                touch();
-            }
         std::vector<JobRuntime *> complete, ended;
         for (auto &[id, j] : jobs_) {
             if (!isActive(j->record.state())) {

@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 #include "farm/error.h"
-#include "farm/hash.h"
+#include "farm/result_stream.h"
 #include "farm/rpc.h"
 
 namespace pf::master {
@@ -33,6 +33,10 @@ Status handle(grpc::ServerContext *ctx, const std::string &token, const char *me
         return {StatusCode::INVALID_ARGUMENT, e.what()};
     } catch (const UnknownWorker &e) {
         return {StatusCode::NOT_FOUND, e.what()};
+    } catch (const StorageError &e) {
+        // Worth repeating once the data directory has room again: workers retry UNAVAILABLE.
+        spdlog::error("{} from {}: {}", method, ctx->peer(), e.what());
+        return {StatusCode::UNAVAILABLE, std::string("master storage: ") + e.what()};
     } catch (const std::exception &e) {
         spdlog::error("{} from {}: {}", method, ctx->peer(), e.what());
         return {StatusCode::INTERNAL, e.what()};
@@ -204,10 +208,8 @@ Status WorkerService::FetchBundle(grpc::ServerContext *ctx, const v1::FetchBundl
 Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<v1::ResultChunk> *reader,
                                    v1::CompleteReply *reply) {
     return handle(ctx, token_, "CompleteTask", [&] {
-        v1::ResultChunk chunk;
-        if (!reader->Read(&chunk) || !chunk.has_header())
-            throw farm::FarmError("CompleteTask: the stream must start with a ResultHeader");
-        const v1::ResultHeader header = chunk.header();
+        const auto read = [&](v1::ResultChunk &c) { return reader->Read(&c); };
+        const v1::ResultHeader header = farm::readResultHeader(read);
         spdlog::debug("attempt={} worker={}: CompleteTask, {} bytes", header.attempt_id(), header.worker_id(),
                       header.payload_size());
         // A stale result is refused before its payload is read.
@@ -215,26 +217,7 @@ Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<
             *reply = master_.ignoreResult(header.worker_id(), header.attempt_id(), reason);
             return Status::OK;
         }
-        if (header.payload_size() > master_.maxPayloadBytes(header.attempt_id()))
-            throw farm::FarmError("CompleteTask: a payload of " + std::to_string(header.payload_size()) +
-                                  " bytes is larger than this task's film can be");
-        // A payload below the message limit comes in one chunk, which is taken over rather than copied.
-        std::string payload;
-        while (reader->Read(&chunk)) {
-            if (!chunk.has_data() || payload.size() + chunk.data().size() > header.payload_size())
-                throw farm::FarmError("CompleteTask: more data than the header announced");
-            if (payload.empty()) {
-                payload.swap(*chunk.mutable_data());
-                payload.reserve(header.payload_size());
-            } else {
-                payload += chunk.data();
-            }
-        }
-        if (payload.size() != header.payload_size())
-            throw farm::FarmError("CompleteTask: the payload ended early (" + std::to_string(payload.size()) + " of " +
-                                  std::to_string(header.payload_size()) + " bytes)");
-        if (farm::hashHex64(payload) != header.payload_hash())
-            throw farm::FarmError("CompleteTask: the payload does not match its hash");
+        const std::string payload = farm::readResultPayload(header, master_.maxPayloadBytes(header.attempt_id()), read);
         *reply = master_.complete(header.worker_id(), header.attempt_id(), header.stats(), payload);
         return Status::OK;
     });

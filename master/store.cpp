@@ -130,7 +130,7 @@ private:
         if (rc != SQLITE_OK) fail("bind");
     }
     [[noreturn]] void fail(const char *what) const {
-        throw std::runtime_error(std::string("store: ") + what + ": " + sqlite3_errmsg(db_));
+        throw StorageError(std::string("store: ") + what + ": " + sqlite3_errmsg(db_));
     }
     sqlite3 *db_;
     sqlite3_stmt *s_ = nullptr;
@@ -156,7 +156,7 @@ private:
         if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
             const std::string msg = err ? err : "unknown error";
             sqlite3_free(err);
-            throw std::runtime_error(std::string("store: ") + sql + ": " + msg);
+            throw StorageError(std::string("store: ") + sql + ": " + msg);
         }
     }
     sqlite3 *db_;
@@ -169,14 +169,25 @@ Store::Store(const std::string &path) {
     if (sqlite3_open(path.c_str(), &db_) != SQLITE_OK) {
         const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
         sqlite3_close(db_);
-        throw std::runtime_error("store: cannot open " + path + ": " + msg);
+        throw StorageError("store: cannot open " + path + ": " + msg);
     }
-    sqlite3_busy_timeout(db_, 5000);
-    // WAL with synchronous=NORMAL survives a killed process (what the farm must survive); film files
-    // are fsynced before the rows that name them are committed.
-    exec("PRAGMA journal_mode=WAL");
-    exec("PRAGMA synchronous=NORMAL");
-    exec(kSchema);
+    try {
+        sqlite3_busy_timeout(db_, 5000);
+        // WAL with synchronous=NORMAL survives a killed process (what the farm must survive); film files
+        // are fsynced before the rows that name them are committed.
+        exec("PRAGMA journal_mode=WAL");
+        exec("PRAGMA synchronous=NORMAL");
+        std::string problems;
+        for (Stmt q(db_, "PRAGMA quick_check"); q.step();)
+            if (const std::string row = q.text(0); row != "ok") problems += (problems.empty() ? "" : "; ") + row;
+        if (!problems.empty()) throw StorageError("store: integrity check failed: " + problems.substr(0, 1000));
+        exec(kSchema);
+    } catch (const StorageError &e) {
+        sqlite3_close(db_);
+        throw StorageError(std::string(e.what()) + " (" + path +
+                           " is damaged: restore it and its -wal file from a backup, or move them away to start "
+                           "with an empty store)");
+    }
 }
 
 Store::~Store() { sqlite3_close(db_); }
@@ -186,7 +197,7 @@ void Store::exec(const char *sql) {
     if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
         const std::string msg = err ? err : "unknown error";
         sqlite3_free(err);
-        throw std::runtime_error("store: " + msg);
+        throw StorageError("store: " + msg);
     }
 }
 
@@ -300,6 +311,34 @@ void Store::commitCheckpoint(const Job &job, int64_t fromTask, int64_t mergedTas
         insert.bind(job.id(), t, file, nowMs).run();
     }
     tx.commit();
+}
+
+void Store::discardResult(int64_t job, int64_t task) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    Transaction tx(db_);
+    Stmt(db_, "DELETE FROM results WHERE job_id = ? AND task_idx = ?").bind(job, task).run();
+    Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?").bind(task_state::kPending, job, task).run();
+    tx.commit();
+}
+
+std::vector<std::string> Store::rewindJob(int64_t job) {
+    const std::lock_guard<std::mutex> lock(mu_);
+    Transaction tx(db_);
+    constexpr const char *kMerged =
+        "FROM results WHERE job_id = ? AND task_idx IN (SELECT idx FROM tasks WHERE "
+        "job_id = ? AND state = ?)";
+    std::vector<std::string> files;
+    Stmt q(db_, (std::string("SELECT file ") + kMerged).c_str());
+    q.bind(job, job, task_state::kMerged);
+    while (q.step()) files.push_back(q.text(0));
+    Stmt(db_, (std::string("DELETE ") + kMerged).c_str()).bind(job, job, task_state::kMerged).run();
+    Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND state = ?")
+        .bind(task_state::kPending, job, task_state::kMerged)
+        .run();
+    Stmt(db_, "DELETE FROM merges WHERE job_id = ?").bind(job).run();
+    Stmt(db_, "UPDATE jobs SET merged_tasks = 0, checkpoint = '' WHERE id = ?").bind(job).run();
+    tx.commit();
+    return files;
 }
 
 void Store::blocklist(int64_t job, const std::string &worker, const std::string &reason) {

@@ -4,8 +4,8 @@
 // its file is complete, so a crash at any point leaves a state the master can resume from.
 //
 // Task work is stored as a serialized TaskSpec (its `work` oneof), so new task kinds need no schema
-// change. All methods are thread-safe (one connection behind a mutex) and throw std::runtime_error on
-// database errors.
+// change. All methods are thread-safe (one connection behind a mutex) and throw StorageError on
+// database errors (a full disk among them).
 #pragma once
 #include <sqlite3.h>
 
@@ -16,6 +16,7 @@
 
 #include "pathfarm/v1/common.pb.h"
 #include "pathfarm/v1/worker.pb.h"
+#include "storage_error.h"
 
 namespace pf::master {
 
@@ -59,6 +60,8 @@ struct StoredResult {
 
 class Store {
 public:
+    // Opens or creates the store and checks its integrity (PRAGMA quick_check): a damaged file is
+    // refused at start with the reason, never half-read into a running farm.
     explicit Store(const std::string &path);
     ~Store();
     Store(const Store &) = delete;
@@ -84,6 +87,13 @@ public:
     // recorded as merged, and the job's record saved, in one transaction.
     void commitCheckpoint(const Job &job, int64_t fromTask, int64_t mergedTasks, const std::string &file,
                           int64_t nowMs);
+    // The stored result of `task` is lost (unreadable or failing its checksum): its row goes and the task
+    // is pending again, to be rendered anew.
+    void discardResult(int64_t job, int64_t task);
+    // The job's checkpointed film is lost: every task merged into it is pending again (its result rows
+    // go, and so do its rows in `merges`, which describe a film that no longer exists). Returns the
+    // files of the removed result rows.
+    std::vector<std::string> rewindJob(int64_t job);
     void blocklist(int64_t job, const std::string &worker, const std::string &reason);
     void saveWorker(const WorkerInfo &w);
 

@@ -23,6 +23,7 @@ BUILD_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev           # tests and benchmarks
   chromium fonts-dejavu-core   # the dashboard test loads the page in headless Chromium (with a font for its text)
   iproute2                     # the multi-host test and deploy/netns build hosts from network namespaces
+  clang libclang-rt-14-dev     # the libFuzzer targets (fuzz/, build-fuzz): clang and its fuzzer/sanitizer runtimes
 )
 
 missing=()

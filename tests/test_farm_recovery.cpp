@@ -7,8 +7,8 @@
 #include <thread>
 
 #include "farm/block_codec.h"
+#include "farm/fake_worker.h"
 #include "farm/harness.h"
-#include "farm/hash.h"
 #include "image/bitmap.h"
 #include "integrators/integrator.h"
 #include "render/image_task.h"
@@ -58,49 +58,6 @@ TEST(FarmRecovery, KilledMasterResumesTheJobWithTheSameImage) {
                               " GROUP BY task_idx HAVING COUNT(*) > 1)"),
               0);
 }
-
-// Drives the worker protocol by hand: two workers, one of which goes silent and delivers late.
-class FakeWorker {
-public:
-    FakeWorker(const Farm &farm) : farm_(farm), stub_(farm.workerStub(64 << 20)) {
-        v1::RegisterRequest req;
-        req.set_name("fake");
-        v1::RegisterReply reply;
-        EXPECT_TRUE(stub_->Register(ctx().get(), req, &reply).ok());
-        id_ = reply.worker_id();
-    }
-    std::optional<v1::TaskSpec> lease() {
-        v1::LeaseRequest req;
-        req.set_worker_id(id_);
-        req.set_wait_ms(5000);
-        v1::LeaseReply reply;
-        EXPECT_TRUE(stub_->LeaseTask(ctx().get(), req, &reply).ok());
-        return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
-    }
-    v1::CompleteReply complete(int64_t attempt, const std::string &payload) {
-        v1::CompleteReply reply;
-        const auto c = ctx();
-        auto writer = stub_->CompleteTask(c.get(), &reply);
-        v1::ResultChunk chunk;
-        chunk.mutable_header()->set_worker_id(id_);
-        chunk.mutable_header()->set_attempt_id(attempt);
-        chunk.mutable_header()->set_payload_size(payload.size());
-        chunk.mutable_header()->set_payload_hash(pf::farm::hashHex64(payload));
-        if (writer->Write(chunk)) {
-            chunk.set_data(payload);
-            writer->Write(chunk);
-            writer->WritesDone();
-        }
-        EXPECT_TRUE(writer->Finish().ok());
-        return reply;
-    }
-
-private:
-    std::unique_ptr<grpc::ClientContext> ctx() const { return farm_.context(farm_.workerToken()); }
-    const Farm &farm_;
-    std::unique_ptr<v1::WorkerService::Stub> stub_;
-    std::string id_;
-};
 
 TEST(FarmRecovery, LateResultOfASupersededAttemptIsIgnored) {
     Farm farm("late-result");

@@ -3,9 +3,9 @@
 //
 // Every failure on input becomes a SceneError naming the file: files come from user scene bundles and
 // render outputs, and a bad one must never crash a worker. Formats are recognised by their magic
-// numbers rather than by stb's chain of format probes, a JPEG's segment structure is checked before stb
-// decodes it (jpegDefect), and images above kMaxImagePixels are refused before any pixel memory is
-// allocated. Outputs are written to a temporary file and renamed into place, so a crash never leaves a
+// numbers rather than by stb's chain of format probes, the chunk or segment structure of a PNG or JPEG
+// is checked before stb decodes it (pngDefect, jpegDefect), and images above kMaxImagePixels are refused before any
+// pixel memory is allocated. Outputs are written to a temporary file and renamed into place, so a crash never leaves a
 // half-written image under the final name.
 // clang-format off: the configuration macros must precede their headers.
 #define STBI_ONLY_PNG
@@ -159,6 +159,23 @@ std::string jpegDefect(const std::vector<unsigned char> &d) {
     return "file ends before the end-of-image marker";
 }
 
+// Walks the chunks of a PNG (ISO/IEC 15948, section 5.3: length, type, data, CRC) and checks what
+// stb_image cannot be trusted with: it grows its buffer for the compressed data to each IDAT chunk's
+// declared length before reading it, so a file of a few bytes that declares a 2 GiB chunk made it
+// allocate 2 GiB (fuzz/fuzz_image.cpp). Every chunk must lie inside the file. Returns why the file is
+// rejected, or an empty string.
+std::string pngDefect(const std::vector<unsigned char> &d) {
+    const size_t n = d.size();
+    for (size_t pos = 8; pos < n;) {  // after the signature
+        if (pos + 12 > n) return "chunk header runs past the end of the file";
+        const size_t len = size_t(d[pos]) << 24 | size_t(d[pos + 1]) << 16 | size_t(d[pos + 2]) << 8 | d[pos + 3];
+        if (len > n - pos - 12) return "chunk of " + std::to_string(len) + " bytes runs past the end of the file";
+        if (std::string_view(reinterpret_cast<const char *>(&d[pos + 4]), 4) == "IEND") return "";
+        pos += 12 + len;
+    }
+    return "file ends before the IEND chunk";
+}
+
 // Deleter for pixel buffers returned by stb_image.
 struct StbFree {
     void operator()(void *p) const { stbi_image_free(p); }
@@ -310,10 +327,9 @@ Bitmap readLDR(const std::string &path, bool srgb) {
     auto corrupt = [&](const std::string &detail) {
         fail(path, std::string("corrupt or truncated ") + format + " file" + detail);
     };
-    if (jpeg) {
-        const std::string defect = jpegDefect(data);
-        if (!defect.empty()) corrupt(" (" + defect + ")");
-    }
+    if (png || jpeg)
+        if (const std::string defect = png ? pngDefect(data) : jpegDefect(data); !defect.empty())
+            corrupt(" (" + defect + ")");
     if (tga && !isTarga(data)) corrupt(" (not a Targa type stb decodes)");
     int w = 0, h = 0, n = 0;
     if (!stbi_info_from_memory(bytes, len, &w, &h, &n)) corrupt(" (unreadable header)");

@@ -53,6 +53,9 @@ void validate(const std::string &path, const std::string &text) {
     for (std::string line; std::getline(in, line);) {
         ++lineNo;
         const auto fail = [&](const std::string &msg) { throw SceneError({path, lineNo}, msg); };
+        // tinyobjloader reads a line only up to a NUL, this pass reads it whole: they would disagree on
+        // what the line defines (found by fuzz/fuzz_mesh.cpp).
+        if (line.find('\0') != std::string::npos) fail("a NUL byte (an OBJ file is text)");
         const std::vector<std::string> tok = splitWhitespace(line);
         if (tok.empty()) continue;
         const std::string &key = tok[0];
@@ -128,6 +131,15 @@ MeshData readOBJ(const std::string &path, bool flipTexCoords) {
             for (size_t k = 1; k + 1 < face.size(); ++k) mesh.triangles.push_back({face[0], face[k], face[k + 1]});
         }
     }
+    // The validation pass has checked every index; this guards the arrays should tinyobjloader ever read a
+    // line differently.
+    const auto defined = [](int index, const std::vector<tinyobj::real_t> &values, size_t dim) {
+        return index < 0 || static_cast<size_t>(index) < values.size() / dim;
+    };
+    for (const auto &key : keys)
+        if (key[0] < 0 || !defined(key[0], attrib.vertices, 3) || !defined(key[1], attrib.texcoords, 2) ||
+            !defined(key[2], attrib.normals, 3))
+            throw SceneError({path, 0}, "a face refers to an element that the file does not define");
     for (const auto &key : keys) {
         const size_t v = static_cast<size_t>(key[0]);
         mesh.positions.emplace_back(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
