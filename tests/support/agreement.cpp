@@ -41,7 +41,7 @@ std::unique_ptr<Scene> loadSharedScene(const std::string &name, int res, const s
         if (at != std::string::npos) xml.replace(at, e.from.size(), e.to);
     }
     auto scene = loadScene(writeFile(dir, "scene.xml", xml));
-    scene->resizeFilm(res, res);
+    if (res > 0) scene->resizeFilm(res, res);
     return scene;
 }
 

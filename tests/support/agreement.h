@@ -18,6 +18,7 @@ struct Edit {
 // A shared scene (scenes/<name>) with a box reconstruction filter: light tracing splats into the pixel it hits
 // without a filter, so a comparison with the path tracer needs the same one-pixel footprint on both sides.
 // `edits` are applied to the XML (each must match); the scene's other files are linked next to the edited copy.
+// The film is resized to res x res (crop window reset), or left as the edited file has it if res <= 0.
 std::unique_ptr<Scene> loadSharedScene(const std::string &name, int res, const std::vector<Edit> &edits = {});
 
 struct BlockStats {
