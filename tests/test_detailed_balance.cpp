@@ -1,5 +1,6 @@
 // Detailed balance of Veach's mutations and perturbations (Veach 1997 ch. 11; ALGORITHMS.md §9.1.4, §9.4)
-// on the shared scenes and Veach's swimming pool, for random current paths (BDPT's, and states that chains
+// on the shared scenes and Veach's swimming pool (and of the portal perturbation on the portal scenes,
+// whose density test_portal checks against its sampler), for random current paths (BDPT's, and states that chains
 // reach from them) and proposals drawn by each mutation:
 //
 // * the density each mutation reports is the density its sampler has: for proposals whose new vertices
@@ -36,9 +37,11 @@
 #include "path/manifold_perturbation.h"
 #include "path/multichain_perturbation.h"
 #include "path/path_chain.h"
+#include "path/portal_perturbation.h"
 #include "render/image_task.h"
 #include "scene/scene.h"
 #include "test_mlt_common.h"
+#include "test_path_helpers.h"
 
 namespace pf::test {
 namespace {
@@ -49,29 +52,7 @@ constexpr double kGlossyAngle = kPi / 180;
 
 std::unique_ptr<Scene> testScene(const std::string &name) { return loadMLTTestScene(name, kResolution, 4); }
 
-// The longest paths tested: the scene's maxDepth, at most 6 edges.
-int maxVertices(const Scene &scene) {
-    const int64_t depth = scene.integratorProperties().getInt("maxDepth", -1);
-    return static_cast<int>(depth < 0 ? 7 : std::min<int64_t>(depth, 6) + 1);
-}
-
-// Complete paths as BDPT's strategies produce them (no Russian roulette), with nonzero contribution.
-std::vector<MutablePath> bdptPaths(const Scene &scene, size_t count) {
-    Properties props(ObjectKind::Integrator, "bdpt", {});
-    props.set("maxDepth", Properties::Type::Integer, int64_t(maxVertices(scene) - 1), {});
-    props.set("rrDepth", Properties::Type::Integer, int64_t(100), {});
-    const BDPT bdpt(props);
-    std::vector<MutablePath> paths;
-    for (uint64_t sample = 0; paths.size() < count && sample < 100000; ++sample) {
-        IndependentSampler sampler(17, sample, 0);
-        const Vec2 raster(sampler.next1D() * kResolution, sampler.next1D() * kResolution);
-        bdpt.evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-            if (paths.size() < count && x.weight > 0 && chainContribution(scene, *x.path).luminance() > 0)
-                paths.emplace_back(*x.path);
-        });
-    }
-    return paths;
-}
+std::vector<MutablePath> bdptPaths(const Scene &scene, size_t count) { return bdptPaths(scene, count, kResolution); }
 
 // Every mutation type, in MutationType order.
 MutationSet allMutations(const Scene &scene) {
@@ -83,6 +64,7 @@ MutationSet allMutations(const Scene &scene) {
     set.add(std::make_unique<CausticPerturbation>(scale));
     set.add(std::make_unique<MultiChainPerturbation>(scale));
     set.add(std::make_unique<ManifoldPerturbation>(scene, 50.0, kGlossyAngle));
+    set.add(std::make_unique<PortalPerturbation>(scene, 1.0 / 256, 1.0 / 16));
     return set;
 }
 
@@ -91,9 +73,9 @@ MutationSet allMutations(const Scene &scene) {
 std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
     const MutationSet set = allMutations(scene);
     ImageBlock film = makeFilmBlock(scene);
-    MutationCounts counts =
-        PathChain::mutationTypes({MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens,
-                                  MutationType::Caustic, MutationType::MultiChain, MutationType::Manifold});
+    MutationCounts counts = PathChain::mutationTypes(
+        {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens, MutationType::Caustic,
+         MutationType::MultiChain, MutationType::Manifold, MutationType::Portal});
     PCG32 rng(5, 7);
     std::vector<MutablePath> paths;
     for (const MutablePath &x : bdptPaths(scene, count / 2)) {
@@ -105,23 +87,6 @@ std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
     }
     return paths;
 }
-
-// Replays a recorded list of numbers (then fresh ones), and records what it hands out.
-class ReplaySampler final : public Sampler {
-public:
-    explicit ReplaySampler(std::vector<double> numbers, uint64_t seed = 0)
-        : numbers_(std::move(numbers)), rng_(seed, 3) {}
-    double next1D() override {
-        if (next_ == numbers_.size()) numbers_.push_back(rng_.nextDouble());
-        return numbers_[next_++];
-    }
-    const std::vector<double> &numbers() const { return numbers_; }
-
-private:
-    std::vector<double> numbers_;
-    size_t next_ = 0;
-    PCG32 rng_;
-};
 
 // Why the reverse of x -> y can be impossible although the forward move was made.
 bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation, const PathView &x, const PathView &y,
@@ -148,6 +113,12 @@ bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation,
             for (int s = 0; s <= lastSplit; ++s)
                 if (isJunction(x, l + s)) return false;
             return true;
+        }
+        case MutationType::Portal: {
+            // y crosses a portal first elsewhere: the reverse move would turn another edge (or about
+            // another point).
+            const PortalCrossing cx = firstPortalCrossing(scene, x), cy = firstPortalCrossing(scene, y);
+            return cx.edge != cy.edge || cx.portal != cy.portal;
         }
         default:
             return false;
@@ -223,7 +194,9 @@ INSTANTIATE_TEST_SUITE_P(
         BalanceCase{"pool", MutationType::Manifold}, BalanceCase{"pool-underwater", MutationType::Manifold},
         BalanceCase{"torus", MutationType::Manifold}, BalanceCase{"glossy-spheres", MutationType::Manifold},
         BalanceCase{"glossy-spheres-analytic", MutationType::Manifold},
-        BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold}),
+        BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold},
+        BalanceCase{"portal-toy", MutationType::Portal}, BalanceCase{"portal-box", MutationType::Portal},
+        BalanceCase{"cornell-box-portal", MutationType::Portal}),
     [](const ::testing::TestParamInfo<BalanceCase> &info) {
         std::string name = info.param.scene + "_" + mutationName(info.param.type);
         for (char &ch : name)

@@ -9,6 +9,7 @@
 #include "path/lens_subpath_mutation.h"
 #include "path/manifold_perturbation.h"
 #include "path/multichain_perturbation.h"
+#include "path/portal_perturbation.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -16,9 +17,9 @@ namespace pf {
 namespace {
 
 // The parameter that enables each mutation type, in MutationType order.
-constexpr const char *kMutationParameters[kMutationTypes] = {"bidirectionalMutation",  "lensSubpathMutation",
-                                                             "lensPerturbation",       "causticPerturbation",
-                                                             "multiChainPerturbation", "manifoldPerturbation"};
+constexpr const char *kMutationParameters[kMutationTypes] = {
+    "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",  "causticPerturbation",
+    "multiChainPerturbation", "manifoldPerturbation", "portalPerturbation"};
 
 // The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
 // since a path lands wherever it meets the film.
@@ -56,6 +57,11 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
+    // The portal perturbation's angles: the paper's 2^-8 and 2^-4 radians (Otsu et al., §5).
+    portalR1_ = props.getFloat("portalR1", 1.0 / 256);
+    portalR2_ = props.getFloat("portalR2", 1.0 / 16);
+    if (!(portalR1_ > 0 && portalR1_ < portalR2_ && portalR2_ <= kPi / 2))
+        props.fail("portalR2", "the portal angles need 0 < portalR1 < portalR2 <= pi / 2");
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -77,9 +83,14 @@ bool PathSpaceIntegrator::usesManifoldPerturbation() const {
 MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) const {
     const PerturbationScale scale(scene);
     MutationSet set;
+    // With portals, the portal perturbation's paper (Otsu et al., §5) gives the global mutation the
+    // probability of all local ones together: bidirectional 0.5, lens and portal 0.25 each.
+    const bool portalMix =
+        !scene.portals().empty() && std::find(types_.begin(), types_.end(), MutationType::Portal) != types_.end();
+    const double bidirectionalWeight = portalMix ? std::max(1.0, static_cast<double>(types_.size() - 1)) : 1.0;
     for (const MutationType type : types_) switch (type) {
             case MutationType::Bidirectional:
-                set.add(std::make_unique<BidirectionalMutation>(minVertices(), maxVertices()));
+                set.add(std::make_unique<BidirectionalMutation>(minVertices(), maxVertices()), bidirectionalWeight);
                 break;
             case MutationType::LensSubpath:
                 set.add(std::make_unique<LensSubpathMutation>());
@@ -95,6 +106,9 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 break;
             case MutationType::Manifold:
                 set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_));
+                break;
+            case MutationType::Portal:
+                set.add(std::make_unique<PortalPerturbation>(scene, portalR1_, portalR2_));
                 break;
         }
     return set;

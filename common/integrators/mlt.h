@@ -20,6 +20,8 @@
 //   manifoldGlossyAngle (1)        dtheta of the manifold perturbation's glossy classification, in degrees:
 //                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
 //                                  value); 0 leaves every glossy vertex non-specular
+//   portalPerturbation (false)     the portal perturbation (path/portal_perturbation.h), for scenes with portals
+//   portalR1, portalR2 (2^-8, 2^-4)  its range of angles in radians
 //   twoStage (false)               rejected when true: two-stage MLT is not implemented
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
@@ -74,6 +76,7 @@ private:
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
     double lambda_ = 50, glossyAngle_ = 0;
+    double portalR1_ = 0, portalR2_ = 0;
     bool lambdaAuto_ = false;
     std::vector<MutationType> types_;
 };
