@@ -94,7 +94,7 @@ def toy():
 
 
 def box():
-    x0, x1, z0, z1 = 0.4, 0.9, 0.2, 0.7
+    x0, x1, z0, z1 = 0.2, 1.2, -0.2, 0.8
     xml = HEADER.format(max_depth=9, fov=75, origin="1.8, 1.6, 1.8", target="-0.6, 0.6, -0.6")
     xml += "\t<emitter type=\"constant\">\n\t\t<rgb name=\"radiance\" value=\"3, 3, 3\"/>\n\t</emitter>\n"
     xml += "\t<!-- floor, four walls, and the roof with its opening and the portal in it -->\n"

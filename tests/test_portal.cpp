@@ -23,8 +23,8 @@
 #include "render/image_task.h"
 #include "scene/scene.h"
 #include "support/chi2.h"
-#include "test_mlt_common.h"
 #include "test_path_helpers.h"
+#include "test_portal_common.h"
 
 namespace pf::test {
 namespace {
@@ -275,43 +275,31 @@ TEST(PortalStationarity, CrossingAngleKeepsTheTarget) {
     EXPECT_GT(counts[0].accepted, static_cast<uint64_t>(chains) * 20) << "the chains must move to show a bias";
 }
 
-// mlt with the portal perturbation (the paper's mixture) agrees with BDPT and with mlt without it.
-class PortalConvergence : public ::testing::TestWithParam<std::string> {};
+// mlt with the portal perturbation (the paper's mixture) agrees with BDPT and with mlt without it: block means
+// over independent renders (test_long_portal: larger, longer paths, more renders).
+struct ConvergenceCase {
+    std::string scene;
+    int maxDepth, mutationsPerPixel, renders;
+};
+
+class PortalConvergence : public ::testing::TestWithParam<ConvergenceCase> {};
 
 TEST_P(PortalConvergence, AgreesWithBDPTAndWithoutPortal) {
     ConvergenceSetup s;
-    s.res = 16;
-    s.budget = 64;
-    s.referenceSpp = 32;
-    s.maxDepth = 5;
-    const std::vector<std::pair<std::string, std::string>> paper = {{"directSamples", "-1"},
-                                                                    {"luminanceSamples", "2048"},
-                                                                    {"lensSubpathMutation", "false"},
-                                                                    {"causticPerturbation", "false"},
-                                                                    {"multiChainPerturbation", "false"}};
-    auto withPortal = paper;
-    withPortal.emplace_back("portalPerturbation", "true");
-    auto scene = loadMLTTestScene(GetParam(), s.res, 4);
-    const auto mlt = makeTestIntegrator(*scene, "mlt", withMaxDepth(paper, s.maxDepth));
-    const auto portal = makeTestIntegrator(*scene, "mlt", withMaxDepth(withPortal, s.maxDepth));
-    const BlockStats plain = blockStats(*scene, *mlt, s.block, s.seeds, s.budget, 2);
-    const BlockStats portals = blockStats(*scene, *portal, s.block, s.seeds, s.budget, 2);
-    const BlockStats &reference = bdptReference(GetParam(), *scene, s.block, s.seeds, s.referenceSpp, s.maxDepth);
-    printAgreement(reference, portals, GetParam() + " mlt+portal vs bdpt");
-    expectBlocksAgree(reference, portals, s.sigmas, s.maxMedianError, s.maxImageError, GetParam() + " vs bdpt");
-    printAgreement(plain, portals, GetParam() + " mlt+portal vs mlt");
-    expectBlocksAgree(plain, portals, s.sigmas, s.maxMedianError, s.maxImageError, GetParam() + " vs mlt");
-    const MutationCounts counts = mutationCounts(*scene, *portal);
-    for (const MutationCount &c : counts)
-        if (c.name == "portal") {
-            std::printf("%s portal: %llu proposed, acceptance %.3f\n", GetParam().c_str(),
-                        static_cast<unsigned long long>(c.proposed), c.accepted / std::max(1.0, double(c.proposed)));
-            EXPECT_GT(c.accepted, 100u) << "the portal perturbation must be used";
-        }
+    s.budget = GetParam().mutationsPerPixel;
+    s.seeds = GetParam().renders;
+    s.referenceSpp = 128;
+    s.maxDepth = GetParam().maxDepth;
+    expectPortalConvergence(GetParam().scene, s, 8192);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, PortalConvergence, ::testing::Values("portal-toy", "portal-box", "cornell-box-portal"),
-                         [](const auto &info) { return gtestName(info.param); });
+// Paths of up to 3 edges; in the box, whose light comes through its small opening, of up to 2 (the light
+// through the opening seen directly) and with more mutations and renders, which the short test can resolve.
+INSTANTIATE_TEST_SUITE_P(Scenes, PortalConvergence,
+                         ::testing::Values(ConvergenceCase{"portal-toy", 3, 256, 16},
+                                           ConvergenceCase{"portal-box", 2, 1024, 24},
+                                           ConvergenceCase{"cornell-box-portal", 3, 256, 16}),
+                         [](const auto &info) { return gtestName(info.param.scene); });
 
 }  // namespace
 }  // namespace pf::test

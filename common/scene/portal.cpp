@@ -18,10 +18,9 @@ std::shared_ptr<Portal> Portal::fromProperties(const Properties &props) {
     portal->dv_ = toWorld.point(Vec3(-1, 1, 0)) - portal->corner_;
     const Vec3 n = cross(portal->du_, portal->dv_);
     portal->area_ = n.length();
-    // A degenerate transform (a zero scale) leaves no opening: relative to the edge lengths, so that the
-    // test does not depend on the scene's units.
-    const double edges = portal->du_.length() * portal->dv_.length();
-    if (!(portal->area_ > 1e-9 * edges) || !std::isfinite(portal->area_))
+    // The loader refuses singular transforms; scales so small that the area underflows leave no opening
+    // either (and no normal).
+    if (!(portal->area_ > 0) || !std::isfinite(portal->area_))
         props.fail("toWorld", "a portal must have non-zero area (its transform collapses the rectangle)");
     const Vec3 z = toWorld.normal(Vec3(0, 0, 1));
     portal->n_ = n / portal->area_;
