@@ -52,8 +52,6 @@ constexpr double kGlossyAngle = kPi / 180;
 
 std::unique_ptr<Scene> testScene(const std::string &name) { return loadMLTTestScene(name, kResolution, 4); }
 
-std::vector<MutablePath> bdptPaths(const Scene &scene, size_t count) { return bdptPaths(scene, count, kResolution); }
-
 // Every mutation type, in MutationType order.
 MutationSet allMutations(const Scene &scene) {
     const PerturbationScale scale(scene);
@@ -78,7 +76,7 @@ std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
          MutationType::MultiChain, MutationType::Manifold, MutationType::Portal});
     PCG32 rng(5, 7);
     std::vector<MutablePath> paths;
-    for (const MutablePath &x : bdptPaths(scene, count / 2)) {
+    for (const MutablePath &x : bdptPaths(scene, count / 2, kResolution)) {
         paths.push_back(x);
         PathChain chain(scene, set, 2, maxVertices(scene), film, 1.0);
         chain.start(x);
@@ -307,7 +305,7 @@ TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
     auto scene = testScene(c.scene);
     const MutationSet set = allMutations(*scene);
     const Mutation &mutation = set[static_cast<size_t>(c.type)];
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 400);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 400, kResolution);
     int checked = 0, lightMoves = 0, apertureMoves = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
@@ -394,7 +392,7 @@ class ManifoldChains : public ::testing::TestWithParam<std::string> {};
 TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
     auto scene = testScene(GetParam());
     const ManifoldPerturbation mutation(*scene, 50.0, kGlossyAngle);
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500, kResolution);
     int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, outliers = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 80; ++i) {
@@ -509,7 +507,7 @@ class GlossyOffsetJacobian : public ::testing::TestWithParam<std::string> {};
 TEST_P(GlossyOffsetJacobian, MatchesFiniteDifferences) {
     auto scene = testScene(GetParam());
     const ManifoldPerturbation mutation(*scene, 50.0, kGlossyAngle);
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500, kResolution);
     int checked = 0, multiple = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {

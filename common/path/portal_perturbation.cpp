@@ -81,16 +81,20 @@ bool PortalPerturbation::sample(const Scene &scene, Sampler &sampler, const Muta
 double PortalPerturbation::density(const Scene &scene, const PathView &x, const PathView &y,
                                    const MutationRecord &record) const {
     if (!applies(x) || y.length() != x.length()) return 0.0;
-    const PortalCrossing cx = firstPortalCrossing(scene, x), cy = firstPortalCrossing(scene, y);
-    const int i = cx.edge;
-    // The reverse move exists only if y crosses first on the same edge through the same point.
+    const PortalCrossing crossing = firstPortalCrossing(scene, x);
+    const int i = crossing.edge;
+    if (record.l != i - 1) return 0.0;
+    // y must be x's crossing edge turned about its crossing point: y's edge i crosses the same portal there.
+    // (Whether y's own first crossing is that one decides whether the reverse move exists, density(y, x).)
+    const Portal &portal = *scene.portals()[static_cast<size_t>(crossing.portal)];
     const PathVertex &a = y.vertex(i), &b = y.vertex(i + 1);
-    const double scale = (b.position() - a.position()).length();
-    if (record.l != i - 1 || cy.edge != i || cy.portal != cx.portal || (cy.point - cx.point).length() > 1e-5 * scale)
-        return 0.0;
-    const Vec3 w = (b.position() - a.position()) / scale;
-    const double cosPortal = std::abs(dot(w, scene.portals()[static_cast<size_t>(cx.portal)]->normal()));
-    const double g = a.cosine(w) * b.cosine(w) / (scale * scale);
+    const double length = (b.position() - a.position()).length();
+    const Vec3 w = (b.position() - a.position()) / length;
+    const Ray edge(a.position(), w, 0, length);
+    const double t = portal.intersect(edge);
+    if (t < 0 || (edge(t) - crossing.point).length() > 1e-5 * length) return 0.0;
+    const double cosPortal = std::abs(dot(w, portal.normal()));
+    const double g = a.cosine(w) * b.cosine(w) / (length * length);
     return cosPortal > 0 ? kernel_.directionPdf(unitDirection(x.vertex(i), x.vertex(i + 1)), w) * g / cosPortal : 0.0;
 }
 
