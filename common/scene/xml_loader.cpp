@@ -371,9 +371,6 @@ void Loader::sceneChild(const Element &e, const SourceFile &file) {
             return;
         case ObjectKind::Shape: {
             // A portal (scene/portal.h) is a top-level rectangle that the rectangle plugin returns as such.
-            const auto portal = e.node().find_child_by_attribute("boolean", "name", "portal");
-            if (portal && std::string(portal.attribute("value").value()) == "true" && e.attr("type") != "rectangle")
-                e.fail("only a rectangle can be a portal (a portal must be planar), not a '" + e.attr("type") + "'");
             const auto object = parseObject(e, ObjectKind::Shape, file, 1);
             if (auto p = std::dynamic_pointer_cast<const Portal>(object)) return scene_.addPortal(std::move(p));
             scene_.addShape(as<Shape>(e, object));
