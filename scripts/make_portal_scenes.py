@@ -125,22 +125,43 @@ def cornell(root):
     return re.sub(r"</scene>\s*$", extra + "</scene>\n", xml)
 
 
-def write(root, name, xml, extra=""):
+SOURCE = """# {name}
+
+Written by `python3 scripts/make_portal_scenes.py` for the portal perturbation (Otsu, Hanika & Dachsbacher,
+"Portal-Based Path Perturbation for Metropolis Light Transport"; ALGORITHMS.md §7.2); CC0 (LICENSE.txt).
+{what}
+Render with the perturbation:
+
+    pathfarm render scenes/{name}/scene.xml --integrator mlt -P portalPerturbation=true --time 60 -o out.exr
+"""
+
+
+def write(root, name, xml, what, extra=""):
     d = os.path.join(root, "scenes", name)
     os.makedirs(d, exist_ok=True)
     with open(os.path.join(d, "scene.xml"), "w", encoding="utf-8") as f:
         f.write(xml)
     with open(os.path.join(d, "LICENSE.txt"), "w", encoding="utf-8") as f:
         f.write(LICENSE.format(name=name, extra=extra))
+    with open(os.path.join(d, "SOURCE.md"), "w", encoding="utf-8") as f:
+        f.write(SOURCE.format(name=name, what=what))
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--root", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
     root = parser.parse_args().root
-    write(root, "portal-toy", toy())
-    write(root, "portal-box", box())
+    write(root, "portal-toy", toy(),
+          "The paper's three-plane toy (its sizes are not published; these are ours): a 2 x 2 area light at height 4,\n"
+          "an 8 x 8 occluder at height 2 with a 0.5 x 0.5 hole (the portal), a diffuse reflector at height 0; the\n"
+          "camera, between occluder and reflector, sees only light that came through the hole. `$res` (default 128)\n"
+          "sets the square resolution.\n")
+    write(root, "portal-box", box(),
+          "A closed 4 x 3 x 4 box with a 1 x 1 opening in its roof (the portal) under a constant environment, a\n"
+          "sphere and a cube inside, seen from inside the box. `$res` (default 128) sets the square resolution.\n")
     write(root, "cornell-box-portal", cornell(root),
+          "scenes/cornell-box with a portal 0.05 below its light, a little larger than the light. cornell-box's\n"
+          "resolution is fixed (1024 x 1024) and it takes no `$res`.\n",
           "\nThe rest of the file is scenes/cornell-box/scene.xml, Benedikt Bitterli's Mitsuba version of the Cornell\n"
           "box (https://benedikt-bitterli.me/resources/), released under CC0 (scenes/cornell-box/LICENSE.txt).\n")
 
