@@ -1,5 +1,6 @@
 // Detailed balance of Veach's mutations and perturbations (Veach 1997 ch. 11; ALGORITHMS.md §9.1.4, §9.4)
-// on the shared scenes and Veach's swimming pool, for random current paths (BDPT's, and states that chains
+// on the shared scenes and Veach's swimming pool (and of the portal perturbation on the portal scenes,
+// whose density test_portal checks against its sampler), for random current paths (BDPT's, and states that chains
 // reach from them) and proposals drawn by each mutation:
 //
 // * the density each mutation reports is the density its sampler has: for proposals whose new vertices
@@ -37,9 +38,11 @@
 #include "path/medium_distance_perturbation.h"
 #include "path/multichain_perturbation.h"
 #include "path/path_chain.h"
+#include "path/portal_perturbation.h"
 #include "render/image_task.h"
 #include "scene/scene.h"
 #include "test_mlt_common.h"
+#include "test_path_helpers.h"
 
 namespace pf::test {
 namespace {
@@ -49,30 +52,6 @@ constexpr int kResolution = 16;
 constexpr double kGlossyAngle = kPi / 180;
 
 std::unique_ptr<Scene> testScene(const std::string &name) { return loadMLTTestScene(name, kResolution, 4); }
-
-// The longest paths tested: the scene's maxDepth, at most 6 edges.
-int maxVertices(const Scene &scene) {
-    const int64_t depth = scene.integratorProperties().getInt("maxDepth", -1);
-    return static_cast<int>(depth < 0 ? 7 : std::min<int64_t>(depth, 6) + 1);
-}
-
-// Complete paths as BDPT's strategies produce them (no Russian roulette), with nonzero contribution.
-std::vector<MutablePath> bdptPaths(const Scene &scene, size_t count) {
-    Properties props(ObjectKind::Integrator, "bdpt", {});
-    props.set("maxDepth", Properties::Type::Integer, int64_t(maxVertices(scene) - 1), {});
-    props.set("rrDepth", Properties::Type::Integer, int64_t(100), {});
-    const BDPT bdpt(props);
-    std::vector<MutablePath> paths;
-    for (uint64_t sample = 0; paths.size() < count && sample < 100000; ++sample) {
-        IndependentSampler sampler(17, sample, 0);
-        const Vec2 raster(sampler.next1D() * kResolution, sampler.next1D() * kResolution);
-        bdpt.evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-            if (paths.size() < count && x.weight > 0 && chainContribution(scene, *x.path).luminance() > 0)
-                paths.emplace_back(*x.path);
-        });
-    }
-    return paths;
-}
 
 // Every mutation type, in MutationType order.
 MutationSet allMutations(const Scene &scene) {
@@ -85,6 +64,7 @@ MutationSet allMutations(const Scene &scene) {
     set.add(std::make_unique<MultiChainPerturbation>(scale));
     set.add(std::make_unique<ManifoldPerturbation>(scene, 50.0, kGlossyAngle));
     set.add(std::make_unique<MediumDistancePerturbation>());
+    set.add(std::make_unique<PortalPerturbation>(scene, 1.0 / 256, 1.0 / 16));
     return set;
 }
 
@@ -95,10 +75,10 @@ std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
     ImageBlock film = makeFilmBlock(scene);
     MutationCounts counts = PathChain::mutationTypes(
         {MutationType::Bidirectional, MutationType::LensSubpath, MutationType::Lens, MutationType::Caustic,
-         MutationType::MultiChain, MutationType::Manifold, MutationType::MediumDistance});
+         MutationType::MultiChain, MutationType::Manifold, MutationType::MediumDistance, MutationType::Portal});
     PCG32 rng(5, 7);
     std::vector<MutablePath> paths;
-    for (const MutablePath &x : bdptPaths(scene, count / 2)) {
+    for (const MutablePath &x : bdptPaths(scene, count / 2, kResolution)) {
         paths.push_back(x);
         PathChain chain(scene, set, 2, maxVertices(scene), film, 1.0);
         chain.start(x);
@@ -107,23 +87,6 @@ std::vector<MutablePath> currentPaths(const Scene &scene, size_t count) {
     }
     return paths;
 }
-
-// Replays a recorded list of numbers (then fresh ones), and records what it hands out.
-class ReplaySampler final : public Sampler {
-public:
-    explicit ReplaySampler(std::vector<double> numbers, uint64_t seed = 0)
-        : numbers_(std::move(numbers)), rng_(seed, 3) {}
-    double next1D() override {
-        if (next_ == numbers_.size()) numbers_.push_back(rng_.nextDouble());
-        return numbers_[next_++];
-    }
-    const std::vector<double> &numbers() const { return numbers_; }
-
-private:
-    std::vector<double> numbers_;
-    size_t next_ = 0;
-    PCG32 rng_;
-};
 
 // Why the reverse of x -> y can be impossible although the forward move was made.
 bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation, const PathView &x, const PathView &y,
@@ -150,6 +113,12 @@ bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation,
             for (int s = 0; s <= lastSplit; ++s)
                 if (isJunction(x, l + s)) return false;
             return true;
+        }
+        case MutationType::Portal: {
+            // y crosses a portal first elsewhere: the reverse move would turn another edge (or about
+            // another point).
+            const PortalCrossing cx = firstPortalCrossing(scene, x), cy = firstPortalCrossing(scene, y);
+            return cx.edge != cy.edge || cx.portal != cy.portal;
         }
         default:
             return false;
@@ -228,7 +197,9 @@ INSTANTIATE_TEST_SUITE_P(
         BalanceCase{"cornell-box-thinlens", MutationType::Manifold}, BalanceCase{"veach-mis", MutationType::Manifold},
         BalanceCase{"volumetric-caustic", MutationType::MediumDistance},
         BalanceCase{"volumetric-caustic", MutationType::Manifold}, BalanceCase{"glass-egg", MutationType::Manifold},
-        BalanceCase{"glass-egg", MutationType::MediumDistance}),
+        BalanceCase{"glass-egg", MutationType::MediumDistance},
+        BalanceCase{"portal-toy", MutationType::Portal}, BalanceCase{"portal-box", MutationType::Portal},
+        BalanceCase{"cornell-box-portal", MutationType::Portal}),
     [](const ::testing::TestParamInfo<BalanceCase> &info) {
         std::string name = info.param.scene + "_" + mutationName(info.param.type);
         for (char &ch : name)
@@ -347,7 +318,7 @@ TEST_P(DensityMatchesSampler, FiniteDifferenceJacobian) {
     auto scene = testScene(c.scene);
     const MutationSet set = allMutations(*scene);
     const Mutation &mutation = set[static_cast<size_t>(c.type)];
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 400);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 400, kResolution);
     int checked = 0, lightMoves = 0, apertureMoves = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
@@ -432,7 +403,7 @@ TEST(MediumDistance, DensityMatchesSampler) {
     const MediumDistancePerturbation mutation;
     int checked = 0;
     double worst = 0;
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 600);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 600, kResolution);
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {
         const MutablePath &x = paths[i];
         MutablePath y;
@@ -501,7 +472,7 @@ TEST_P(ManifoldChains, MovedVertexDensityMatchesSampler) {
     auto scene = testScene(GetParam());
     const bool media = GetParam().rfind("glass-egg", 0) == 0;
     const ManifoldPerturbation mutation(*scene, 50.0, media ? 20 * kGlossyAngle : kGlossyAngle);
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500, kResolution);
     int checked = 0, firstChain = 0, secondChain = 0, glossy = 0, mediumChains = 0, outliers = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 80; ++i) {
@@ -621,7 +592,7 @@ class GlossyOffsetJacobian : public ::testing::TestWithParam<std::string> {};
 TEST_P(GlossyOffsetJacobian, MatchesFiniteDifferences) {
     auto scene = testScene(GetParam());
     const ManifoldPerturbation mutation(*scene, 50.0, kGlossyAngle);
-    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500);
+    const std::vector<MutablePath> paths = bdptPaths(*scene, 1500, kResolution);
     int checked = 0, multiple = 0;
     double worst = 0;
     for (size_t i = 0; i < paths.size() && checked < 60; ++i) {

@@ -18,7 +18,7 @@
 // Mitsuba 0.6 parameter names and defaults: maxDepth (-1), rrDepth (10), directSamples (16),
 // numChains (1), maxChains (0: no cap on the chains of one seed), chainLength (100), lensPerturbation (true),
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
-// (false), manifoldPerturbation (false), lambda (50), manifoldGlossyAngle (1),
+// (false), manifoldPerturbation (false), portalPerturbation (false), lambda (50), manifoldGlossyAngle (1),
 // luminanceSamples (15000: the pilot's BDPT samples); see integrators/mlt.h for those shared with mlt. Beyond
 // Mitsuba: passMutations (2^20), the expected mutations of one pass (render/burst.h), the step in which a
 // time budget is spent.

@@ -10,6 +10,7 @@
 #include "path/manifold_perturbation.h"
 #include "path/medium_distance_perturbation.h"
 #include "path/multichain_perturbation.h"
+#include "path/portal_perturbation.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -19,7 +20,7 @@ namespace {
 // The parameter that enables each mutation type, in MutationType order.
 constexpr const char *kMutationParameters[kMutationTypes] = {
     "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",          "causticPerturbation",
-    "multiChainPerturbation", "manifoldPerturbation", "mediumDistancePerturbation"};
+    "multiChainPerturbation", "manifoldPerturbation", "mediumDistancePerturbation", "portalPerturbation"};
 
 // The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
 // since a path lands wherever it meets the film.
@@ -62,6 +63,11 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
     mediumChains_ = props.getBool("mediumChains", true);
+    // The portal perturbation's angles: the paper's 2^-8 and 2^-4 radians (Otsu et al., §5).
+    portalR1_ = props.getFloat("portalR1", 1.0 / 256);
+    portalR2_ = props.getFloat("portalR2", 1.0 / 16);
+    if (!(portalR1_ > 0 && portalR1_ < portalR2_ && portalR2_ <= kPi / 2))
+        props.fail("portalR2", "the portal angles need 0 < portalR1 < portalR2 <= pi / 2");
     if (maxDepth < -1 || maxDepth == 0) props.fail("maxDepth", "must be -1 (unbounded) or at least 1");
     if (rrDepth < 1) props.fail("rrDepth", "must be at least 1");
     if (directSamples_ < -1) props.fail("directSamples", "must be -1 (no separate direct component) or at least 0");
@@ -83,9 +89,14 @@ bool PathSpaceIntegrator::usesManifoldPerturbation() const {
 MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) const {
     const PerturbationScale scale(scene);
     MutationSet set;
+    // With portals, the portal perturbation's paper (Otsu et al., §5) gives the global mutation the
+    // probability of all local ones together: bidirectional 0.5, lens and portal 0.25 each.
+    const bool portalMix =
+        !scene.portals().empty() && std::find(types_.begin(), types_.end(), MutationType::Portal) != types_.end();
+    const double bidirectionalWeight = portalMix ? std::max(1.0, static_cast<double>(types_.size() - 1)) : 1.0;
     for (const MutationType type : types_) switch (type) {
             case MutationType::Bidirectional:
-                set.add(std::make_unique<BidirectionalMutation>(minVertices(), maxVertices()));
+                set.add(std::make_unique<BidirectionalMutation>(minVertices(), maxVertices()), bidirectionalWeight);
                 break;
             case MutationType::LensSubpath:
                 set.add(std::make_unique<LensSubpathMutation>());
@@ -105,6 +116,9 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 break;
             case MutationType::MediumDistance:
                 set.add(std::make_unique<MediumDistancePerturbation>());
+                break;
+            case MutationType::Portal:
+                set.add(std::make_unique<PortalPerturbation>(scene, portalR1_, portalR2_));
                 break;
         }
     return set;

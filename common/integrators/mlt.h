@@ -26,6 +26,8 @@
 //   twoStage (false)               two-stage MLT (render/two_stage.h): a first stage's low-resolution image
 //                                  I steers the chains, whose target becomes L / I
 //   firstStageSizeReduction (16)   the first stage's image is this many times smaller in x and y
+//   portalPerturbation (false)     the portal perturbation (path/portal_perturbation.h), for scenes with portals
+//   portalR1, portalR2 (2^-8, 2^-4)  its range of angles in radians
 //
 // --spp is mutations per pixel (Mitsuba's sampleCount).
 //
@@ -80,6 +82,7 @@ private:
     int64_t directSamples_ = 16;
     double lambda_ = 50, glossyAngle_ = 0;
     bool mediumChains_ = true;
+    double portalR1_ = 0, portalR2_ = 0;
     bool lambdaAuto_ = false;
     std::vector<MutationType> types_;
 };

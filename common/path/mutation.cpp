@@ -69,25 +69,34 @@ const char *mutationName(MutationType type) {
             return "manifold";
         case MutationType::MediumDistance:
             return "mediumDistance";
+        case MutationType::Portal:
+            return "portal";
     }
     return "";
 }
 
 double MutationSet::selectionProbability(const PathView &x, size_t k) const {
     if (!mutations_[k]->applies(x)) return 0.0;
-    int applicable = 0;
-    for (const auto &mutation : mutations_) applicable += mutation->applies(x) ? 1 : 0;
-    return 1.0 / applicable;
+    double applicable = 0;
+    for (size_t j = 0; j < mutations_.size(); ++j) applicable += mutations_[j]->applies(x) ? weights_[j] : 0;
+    return weights_[k] / applicable;
 }
 
 int MutationSet::select(const PathView &x, double u) const {
     std::vector<int> applicable;
+    double total = 0;
     for (size_t k = 0; k < mutations_.size(); ++k)
-        if (mutations_[k]->applies(x)) applicable.push_back(static_cast<int>(k));
+        if (mutations_[k]->applies(x)) {
+            applicable.push_back(static_cast<int>(k));
+            total += weights_[k];
+        }
     if (applicable.empty()) return -1;
-    const size_t pick =
-        std::min(applicable.size() - 1, static_cast<size_t>(u * static_cast<double>(applicable.size())));
-    return applicable[pick];
+    double below = 0;
+    for (const int k : applicable) {
+        below += weights_[static_cast<size_t>(k)];
+        if (u * total < below) return k;
+    }
+    return applicable.back();
 }
 
 bool extendWalk(const Scene &scene, Sampler &sampler, TransportMode mode, MutablePath &y, int from, int steps) {

@@ -61,9 +61,10 @@ double importanceToCanonical(const Scene &scene, const PathView &path, int i);
 bool isNonSpecular(const PathVertex &v);
 
 // Veach's mutation and perturbation types, manifold exploration's manifold perturbation
-// (path/manifold_perturbation.h) and its medium-distance perturbation (path/medium_distance_perturbation.h).
-enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain, Manifold, MediumDistance };
-constexpr int kMutationTypes = 7;
+// (path/manifold_perturbation.h), its medium-distance perturbation (path/medium_distance_perturbation.h) and the
+// portal perturbation (path/portal_perturbation.h), in the order of MutationSet's counts.
+enum class MutationType { Bidirectional, LensSubpath, Lens, Caustic, MultiChain, Manifold, MediumDistance, Portal };
+constexpr int kMutationTypes = 8;
 const char *mutationName(MutationType type);
 
 // What a mutation replaced: x keeps x_{-1} .. x_l and x_m .. x_n, and y has `added` new vertices between
@@ -99,10 +100,14 @@ public:
     virtual void addCounters(ChainCounters &) const {}
 };
 
-// The mixture of enabled mutations.
+// The mixture of enabled mutations: each is selected with probability proportional to its weight among
+// those that apply (the portal perturbation's paper mixes them unequally, path/portal_perturbation.h).
 class MutationSet {
 public:
-    void add(std::unique_ptr<Mutation> mutation) { mutations_.push_back(std::move(mutation)); }
+    void add(std::unique_ptr<Mutation> mutation, double weight = 1.0) {
+        mutations_.push_back(std::move(mutation));
+        weights_.push_back(weight);
+    }
     bool empty() const { return mutations_.empty(); }
     size_t size() const { return mutations_.size(); }
     const Mutation &operator[](size_t k) const { return *mutations_[k]; }
@@ -113,6 +118,7 @@ public:
 
 private:
     std::vector<std::unique_ptr<Mutation>> mutations_;
+    std::vector<double> weights_;
 };
 
 // Building blocks shared by the mutations that regenerate a subpath with the random walks of BDPT.

@@ -11,6 +11,7 @@
 #include "emitter/emitter.h"
 #include "image/film.h"
 #include "scene/intersection.h"
+#include "scene/portal.h"
 #include "scene/properties.h"
 #include "scene/shape.h"
 #include "sensor/sensor.h"
@@ -26,6 +27,8 @@ public:
 
     void addShape(std::shared_ptr<Shape> shape);
     void addEmitter(std::shared_ptr<Emitter> emitter);  // non-shape emitters (point, envmap, ...)
+    // Portals of the portal perturbation (scene/portal.h): kept apart from the geometry, so that no ray sees them.
+    void addPortal(std::shared_ptr<const Portal> portal) { portals_.push_back(std::move(portal)); }
     void setSensor(std::shared_ptr<Sensor> sensor) { sensor_ = std::move(sensor); }
     // Changes the film resolution (crop reset to the full film) and lets the sensor recompute its
     // raster mapping. Used by benchmarks and previews.
@@ -65,6 +68,7 @@ public:
     const std::vector<std::shared_ptr<Shape>> &shapes() const { return shapes_; }
     const std::vector<std::shared_ptr<Emitter>> &emitters() const { return emitters_; }
     const Emitter *environment() const { return environment_; }
+    const std::vector<std::shared_ptr<const Portal>> &portals() const { return portals_; }
     const Sensor &sensor() const { return *sensor_; }
     const std::shared_ptr<Sensor> &sensorPtr() const { return sensor_; }
     const Properties &integratorProperties() const { return integratorProps_; }
@@ -90,6 +94,7 @@ private:
     std::vector<std::shared_ptr<Shape>> shapes_;
     std::vector<const Shape *> geomToShape_;
     std::vector<std::shared_ptr<Emitter>> emitters_;  // all emitters, incl. area emitters of shapes
+    std::vector<std::shared_ptr<const Portal>> portals_;
     const Emitter *environment_ = nullptr;
     std::shared_ptr<Sensor> sensor_;
     Properties integratorProps_;

@@ -31,6 +31,10 @@ std::shared_ptr<BSDF> defaultBSDF(const Properties &props, const char *type, con
 }  // namespace
 
 void Shape::configureCommon(const Properties &props) {
+    // The rectangle plugin turns a rectangle with `portal` into a Portal (scene/portal.h) before it gets here.
+    if (props.getBool("portal", false))
+        props.fail("portal",
+                   "only a rectangle can be a portal (a portal must be planar), not a '" + props.pluginName() + "'");
     const auto emitters = props.children(ObjectKind::Emitter);
     if (emitters.size() > 1) props.fail("a shape can carry at most one emitter");
     if (!emitters.empty()) {

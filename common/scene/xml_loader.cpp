@@ -369,9 +369,13 @@ void Loader::sceneChild(const Element &e, const SourceFile &file) {
             // The integrator is built later by the renderer, which checks its own parameters.
             scene_.setIntegratorProperties(parseProperties(e, ObjectKind::Integrator, file, 1));
             return;
-        case ObjectKind::Shape:
-            scene_.addShape(as<Shape>(e, parseObject(e, ObjectKind::Shape, file, 1)));
+        case ObjectKind::Shape: {
+            // A portal (scene/portal.h) is a top-level rectangle that the rectangle plugin returns as such.
+            const auto object = parseObject(e, ObjectKind::Shape, file, 1);
+            if (auto p = std::dynamic_pointer_cast<const Portal>(object)) return scene_.addPortal(std::move(p));
+            scene_.addShape(as<Shape>(e, object));
             return;
+        }
         case ObjectKind::Emitter:
             scene_.addEmitter(as<Emitter>(e, parseObject(e, ObjectKind::Emitter, file, 1)));
             return;
