@@ -58,9 +58,12 @@ TEST(SmsLong, SphereCaustic) {
     expectSmsAgrees("sphere-caustic", notCaster, 32, 128, 32, "sphere-caustic, mirror sphere not a caster");
 }
 
-// Two-refraction chains through the glass sphere estimated by sms (bounces = 2).
+// Two-refraction chains through the glass sphere estimated by sms (bounces = 2). The path tracer finds the far
+// floor's share of the glass caustic only in rare paths: at 128 spp its block means there are low, with too small
+// standard errors (seen at 32²: a corner block 0.10533 at 128 spp, 0.10598 +- 0.00028 at 512 spp, sms 0.10592).
+
 TEST(SmsLong, SphereCausticTwoBounces) {
-    expectSmsAgrees("sphere-caustic", kBigSphereLight, 32, 128, 32, "sphere-caustic, bounces=2", 2);
+    expectSmsAgrees("sphere-caustic", kBigSphereLight, 32, 512, 128, "sphere-caustic, bounces=2", 2);
 }
 
 // Biased sms: the image's mean is below unbiased sms's and rises with M (the energy loss of [SMS §5.2]).

@@ -574,12 +574,14 @@ INSTANTIATE_TEST_SUITE_P(Scenes, SmsAgreement,
                                                       16,
                                                       128,
                                                       32},
-                                           // Two-refraction chains through the glass sphere are sms's too.
+                                           // Two-refraction chains through the glass sphere are sms's too (path
+                                           // needs more samples for the rare paths of that caustic, as in
+                                           // test_long_sms.cpp).
                                            RenderCase{"sphere_two_bounces",
                                                       "sphere-caustic",
                                                       {kBigSphereLight, kBigSphereLightRadiance, kSecondLight},
                                                       16,
-                                                      128,
+                                                      512,
                                                       64,
                                                       2},
                                            RenderCase{"pool",

@@ -158,9 +158,4 @@ std::optional<ConstraintJet> halfVectorConstraint(const Vec3 &a, const ManifoldV
     return ConstraintJet{*c - v.offset, d->self};
 }
 
-std::optional<ConstraintJet> specularConstraint(SmsConstraint form, const Vec3 &a, const ManifoldVertex &v,
-                                                const Vec3 &b) {
-    return form == SmsConstraint::AngleDifference ? angleDifferenceConstraint(a, v, b) : halfVectorConstraint(a, v, b);
-}
-
 }  // namespace pf

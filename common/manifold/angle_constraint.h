@@ -14,8 +14,9 @@
 //
 // Both come with the 2x2 derivative with respect to the vertex's chart coordinates (u, v) (ManifoldVertex's
 // orthonormal chart, first-order model x = p + u dp/du + v dp/dv, n = n + u dn/du + v dn/dv of §6.2), with a
-// and b fixed: that is the whole Newton system of a one-vertex chain. The angle form is differentiated
-// exactly by forward-mode dual numbers, so no hand-derived formula can drift from the value.
+// and b fixed: that is the whole Newton system of a one-vertex chain. chainConstraint() adds the derivatives with
+// respect to the neighbours' charts, the off-diagonal blocks of a chain of several vertices. The angle form is
+// differentiated exactly by forward-mode dual numbers, so no hand-derived formula can drift from the value.
 #pragma once
 #include <optional>
 
@@ -50,8 +51,5 @@ std::optional<ChainConstraint> chainConstraint(SmsConstraint form, const Manifol
 
 // The half-vector constraint T^T h at v and its diagonal block of ∇C (specular_constraint.h).
 std::optional<ConstraintJet> halfVectorConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b);
-
-std::optional<ConstraintJet> specularConstraint(SmsConstraint form, const Vec3 &a, const ManifoldVertex &v,
-                                                const Vec3 &b);
 
 }  // namespace pf
