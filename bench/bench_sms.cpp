@@ -1,7 +1,8 @@
 // Specular manifold sampling against the path tracer, BDPT and MEPT (issue 15's closing figures): equal-time
-// relMSE against a long BDPT reference for path, bdpt, mept, sms unbiased and sms biased with M = 1, 4, 8, on the ring
-// and sphere scenes; the solver's success rate and mean Bernoulli trials per solution (the paper's Fig. 6 reports
-// 26-29% and about 6 on its refractive sphere); rays per second of sms against path.
+// relMSE against a long BDPT reference for path, bdpt, mept, sms unbiased and sms biased with M = 1, 4, 8, and unbiased
+// sms with two-vertex chains (bounces = 2), on the ring and sphere scenes; the solver's success rate and mean Bernoulli
+// trials per solution (the paper's Fig. 6 reports 26-29% and about 6 on its refractive sphere); rays per second of sms
+// against path.
 //
 //     bench_sms [--res N] [--time S] [--ref-spp N] [--threads T] [scene.xml ...]   (default scenes: from the
 //     repository root, scenes/ring-caustic and scenes/sphere-caustic)
@@ -9,6 +10,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench_support.h"
@@ -82,15 +84,19 @@ int main(int argc, char **argv) {
         row("path", *pf::createIntegrator("path", integratorProps(*scene, "path"), true), nullptr);
         row("bdpt", *bdpt, nullptr);
         row("mept", *pf::createIntegrator("mept", integratorProps(*scene, "mept"), true), nullptr);
-        for (int m : {0, 1, 4, 8}) {
+        // (M, bounces): M = 0 is unbiased.
+        for (const auto &[m, bounces] : std::vector<std::pair<int, int>>{{0, 1}, {1, 1}, {4, 1}, {8, 1}, {0, 2}}) {
             pf::Properties props = integratorProps(*scene, "sms");
             if (m > 0) {
                 props.set("biased", pf::Properties::Type::Boolean, true, {});
                 props.set("trials", pf::Properties::Type::Integer, int64_t(m), {});
             }
+            if (bounces > 1) props.set("bounces", pf::Properties::Type::Integer, int64_t(bounces), {});
             const auto connection = std::make_shared<pf::SmsConnection>(props);
             const pf::PathTracer sms(props, false, connection);
-            row(m == 0 ? "sms unbiased" : "sms biased M=" + std::to_string(m), sms, connection.get());
+            row((m == 0 ? "sms unbiased" : "sms biased M=" + std::to_string(m)) +
+                    (bounces > 1 ? " bounces=" + std::to_string(bounces) : ""),
+                sms, connection.get());
         }
     }
     return 0;

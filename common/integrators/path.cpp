@@ -129,8 +129,9 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
     // Before the first scattering event emission is counted where the path meets it; afterwards
     // emissionAlong has already counted it at the vertex that sampled the direction.
     bool scattered = false;
-    // Whether the last vertex ran the caustic strategy and left by a smooth lobe (caustic_connection.h).
-    bool afterReceiver = false;
+    // The caustic strategy's chain so far (caustic_connection.h): -1 outside one; else the number of caster
+    // vertices since the receiver that ran the strategy and left by a smooth lobe, and that receiver's budget.
+    int chained = -1, chainBudget = 0;
 
     for (;;) {
         MediumSample ms;
@@ -140,6 +141,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             if (maxDepth_ >= 0 && depth >= maxDepth_) break;
             const int budget = crossingBudget(maxDepth_, depth);
             throughput *= ms.sigmaS * ms.transmittance / ms.pdfSuccess;
+            chained = -1;  // a medium vertex breaks any caustic chain
             const PhaseFunction &phase = medium->phase();
             const Vec3 wi = -ray.d;
 
@@ -176,9 +178,12 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             // Mitsuba's strictNormals: the geometric and shading normals must agree on the incident side.
             if (!passOnly && strictNormals_ && dot(ray.d, its.n) * Frame::cosTheta(its.wi) >= 0) break;
 
-            const bool receiver = !passOnly && caustics_ && (bsdf->flags() & BSDFFlags::Smooth) &&
-                                  (maxDepth_ < 0 || depth + 1 < maxDepth_) && caustics_->receives(its);
-            if (receiver) L += throughput * caustics_->estimate(scene, sampler, its);
+            const int chainAllowed = !caustics_      ? 0
+                                     : maxDepth_ < 0 ? caustics_->chainLength()
+                                                     : std::min(caustics_->chainLength(), maxDepth_ - depth - 1);
+            const bool receiver =
+                !passOnly && chainAllowed >= 1 && (bsdf->flags() & BSDFFlags::Smooth) && caustics_->receives(its);
+            if (receiver) L += throughput * caustics_->estimate(scene, sampler, its, chainAllowed);
             if (!passOnly && (bsdf->flags() & BSDFFlags::Smooth)) {
                 DirectSample ds(its.p, its.n);
                 const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
@@ -198,8 +203,13 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             if (!passOnly && strictNormals_ && dot(wo, its.n) * Frame::cosTheta(bs.wo) <= 0) break;
             throughput *= weight;
             eta *= bs.eta;
-            const bool leaveOut = afterReceiver && caustics_->casts(its, bs.sampledType);
-            afterReceiver = receiver && (bs.sampledType & BSDFFlags::Smooth) != 0;
+            const bool leaveOut = chained >= 0 && chained < chainBudget && caustics_->casts(its, bs.sampledType);
+            if (receiver && (bs.sampledType & BSDFFlags::Smooth) != 0) {
+                chained = 0;
+                chainBudget = chainAllowed;
+            } else {
+                chained = leaveOut ? chained + 1 : -1;
+            }
             if (media_) medium = mediumAfter(its, wo, medium);
             origin = its.p;
             ray = scene.spawnRay(its, wo);

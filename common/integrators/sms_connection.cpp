@@ -1,5 +1,6 @@
 #include "integrators/sms_connection.h"
 
+#include <algorithm>
 #include <cinttypes>
 #include <cstdio>
 #include <vector>
@@ -49,12 +50,12 @@ SmsConnection::SmsConnection(const Properties &props) {
     settings_.maxIterations = static_cast<int>(props.getInt("maxIterations", settings_.maxIterations));
     settings_.solverThreshold = props.getFloat("solverThreshold", settings_.solverThreshold);
     settings_.uniquenessThreshold = props.getFloat("uniquenessThreshold", settings_.uniquenessThreshold);
-    const int64_t bounces = props.getInt("bounces", 1);
+    bounces_ = static_cast<int>(props.getInt("bounces", 1));
     if (settings_.trials < 1) props.fail("trials", "must be at least 1");
     if (settings_.maxIterations < 1) props.fail("maxIterations", "must be at least 1");
     if (!(settings_.solverThreshold > 0)) props.fail("solverThreshold", "must be positive");
     if (!(settings_.uniquenessThreshold > 0)) props.fail("uniquenessThreshold", "must be positive");
-    if (bounces != 1) props.fail("bounces", "only one-bounce chains (1) are implemented");
+    if (bounces_ != 1 && bounces_ != 2) props.fail("bounces", "must be 1 or 2 (the longest specular chain)");
 }
 
 void SmsConnection::check(const Scene &scene) const {
@@ -92,7 +93,7 @@ bool SmsConnection::connectsTo(const Emitter &emitter) const {
     return hasPosition(emitter) && emitter.causticEmitter().value_or(true);
 }
 
-Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Intersection &x1) const {
+Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Intersection &x1, int budget) const {
     std::vector<const Emitter *> emitters;
     for (const auto &e : scene.emitters())
         if (connectsTo(*e)) emitters.push_back(e.get());
@@ -107,10 +108,12 @@ Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Int
     const ManifoldVertex x3 = emitterVertex(ps);
     const BSDF &receiverBsdf = *x1.bsdf();
 
-    // f(x_1) F(x_2) G L_e / p(x_3) of one solution x_2, visibility x_2 -> x_3 included (x_1 -> x_2 is the
-    // solver's first hit).
-    const auto contribution = [&](const Intersection &x2) -> Spectrum {
-        const Vec3 d12 = normalize(x2.p - x1.p), d32 = normalize(x2.p - ps.p);
+    // f(x_1) F(x_2) … G L_e / p(x_3) of one solved chain, visibility of its last vertex and x_3 included (the
+    // chain's own segments are the solver's first hits). A chain whose later vertex is not a caster is the path
+    // tracer's (caustic_connection.h): it contributes nothing here.
+    const auto contribution = [&](const SpecularChain &chain) -> Spectrum {
+        const Intersection &last = chain.back();
+        const Vec3 d12 = normalize(chain.front().p - x1.p), d32 = normalize(last.p - ps.p);
         const Spectrum f1 = receiverBsdf.eval(BSDFContext(), x1, x1.wi, x1.toLocal(d12));
         DirectionSample out;
         out.d = d32;
@@ -118,19 +121,26 @@ Spectrum SmsConnection::estimate(const Scene &scene, Sampler &sampler, const Int
         if (f1.isBlack() || le.isBlack()) return {};
         // evalPosition * evalDirection is L_e cos at an area light (emitter.h); G has that cosine already.
         if (ps.measure != Measure::Discrete) le *= 1.0 / std::abs(dot(ps.n, d32));
-        BSDFSample bs;
-        const Scattering event = specularEvent(*x2.shape);
-        const BSDFContext lobe(TransportMode::Radiance, event == Scattering::Refraction ? BSDFFlags::DeltaTransmission
-                                                                                        : BSDFFlags::DeltaReflection);
-        const Spectrum specular = x2.bsdf()->sample(lobe, x2, x2.wi, bs, 0.5, Vec2(0.5, 0.5));
-        if (specular.isBlack() || scene.occluded(scene.spawnRayTo(x2, ps.p))) return {};
-        const std::optional<double> g = specularChainGeometry(x1, x2, x3);
+        Spectrum specular(1.0);
+        for (const Intersection &x2 : chain) {
+            if (!isCaster(*x2.shape)) return {};
+            BSDFSample bs;
+            const Scattering event = specularEvent(*x2.shape);
+            const BSDFContext lobe(TransportMode::Radiance, event == Scattering::Refraction
+                                                                ? BSDFFlags::DeltaTransmission
+                                                                : BSDFFlags::DeltaReflection);
+            specular *= x2.bsdf()->sample(lobe, x2, x2.wi, bs, 0.5, Vec2(0.5, 0.5));
+        }
+        if (specular.isBlack() || scene.occluded(scene.spawnRayTo(last, ps.p))) return {};
+        const std::optional<double> g = specularChainGeometry(x1, chain, x3);
         return g ? f1 * specular * le * (*g * invPdf) : Spectrum();
     };
 
     Spectrum sum;
     for (const auto &shape : scene.shapes())
-        if (isCaster(*shape)) sum += manifoldSum(scene, x1, ps.p, *shape, settings_, sampler, stats_, contribution);
+        if (isCaster(*shape))
+            for (int vertices = 1; vertices <= std::min(budget, bounces_); ++vertices)
+                sum += manifoldSum(scene, x1, ps.p, *shape, vertices, settings_, sampler, stats_, contribution);
     return sum;
 }
 

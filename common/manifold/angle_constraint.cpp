@@ -82,13 +82,11 @@ Frame equatorFrame(const Vec3 &d) {
     return Frame(d, a, b);
 }
 
-}  // namespace
-
-std::optional<ConstraintJet> angleDifferenceConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b,
-                                                       const Frame *frame) {
-    const DVec x = linear(v.p, v.dpdu, v.dpdv);
-    const DVec n = normalize(linear(v.n, v.dndu, v.dndv));
-    const DVec toA = constant(a) - x, toB = constant(b) - x;
+// C at the vertex x (shading normal n) between a and b, each given with its derivatives with respect to the
+// chart of the one point that moves, with v's event and eta; `frame` as in angleDifferenceConstraint().
+std::optional<ConstraintJet> angleDifference(const DVec &a, const DVec &x, const DVec &n, const DVec &b,
+                                             const ManifoldVertex &v, const Frame *frame) {
+    const DVec toA = a - x, toB = b - x;
     if (!(dot(toA, toA).v > 0) || !(dot(toB, toB).v > 0)) return std::nullopt;
     DVec wi = normalize(toA), wo = normalize(toB);
     double eta = v.eta;
@@ -116,17 +114,48 @@ std::optional<ConstraintJet> angleDifferenceConstraint(const Vec3 &a, const Mani
     return jet;
 }
 
+DVec chartOf(const ManifoldVertex &v) { return linear(v.p, v.dpdu, v.dpdv); }
+
+}  // namespace
+
+std::optional<ConstraintJet> angleDifferenceConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b,
+                                                       const Frame *frame) {
+    return angleDifference(constant(a), chartOf(v), normalize(linear(v.n, v.dndu, v.dndv)), constant(b), v, frame);
+}
+
+std::optional<ChainConstraint> chainConstraint(SmsConstraint form, const ManifoldVertex &prev, const ManifoldVertex &v,
+                                               const ManifoldVertex &next, const Frame *frame) {
+    ChainConstraint c;
+    if (form == SmsConstraint::HalfVector) {
+        const std::optional<Vec2> value = constraintValue(prev, v, next);
+        const std::optional<ConstraintDerivatives> d = constraintDerivatives(prev, v, next);
+        if (!value || !d) return std::nullopt;
+        c.value = *value - v.offset;
+        c.prev = d->prev;
+        c.self = d->self;
+        c.next = d->next;
+        return c;
+    }
+    // Three passes of the dual numbers, one per moving vertex: the same value, one block each.
+    const DVec a = constant(prev.p), x = constant(v.p), b = constant(next.p);
+    const DVec n = constant(normalize(v.n));
+    const std::optional<ConstraintJet> self = angleDifferenceConstraint(prev.p, v, next.p, frame);
+    const std::optional<ConstraintJet> wrtPrev = angleDifference(chartOf(prev), x, n, b, v, frame);
+    const std::optional<ConstraintJet> wrtNext = angleDifference(a, x, n, chartOf(next), v, frame);
+    if (!self || !wrtPrev || !wrtNext) return std::nullopt;
+    c.value = self->value;
+    c.self = self->derivative;
+    c.prev = wrtPrev->derivative;
+    c.next = wrtNext->derivative;
+    return c;
+}
+
 std::optional<ConstraintJet> halfVectorConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b) {
     const ManifoldVertex prev = ManifoldVertex::fixedPosition(a), next = ManifoldVertex::fixedPosition(b);
     const std::optional<Vec2> c = constraintValue(prev, v, next);
     const std::optional<ConstraintDerivatives> d = constraintDerivatives(prev, v, next);
     if (!c || !d) return std::nullopt;
     return ConstraintJet{*c - v.offset, d->self};
-}
-
-std::optional<ConstraintJet> specularConstraint(SmsConstraint form, const Vec3 &a, const ManifoldVertex &v,
-                                                const Vec3 &b) {
-    return form == SmsConstraint::AngleDifference ? angleDifferenceConstraint(a, v, b) : halfVectorConstraint(a, v, b);
 }
 
 }  // namespace pf

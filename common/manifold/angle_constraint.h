@@ -14,8 +14,9 @@
 //
 // Both come with the 2x2 derivative with respect to the vertex's chart coordinates (u, v) (ManifoldVertex's
 // orthonormal chart, first-order model x = p + u dp/du + v dp/dv, n = n + u dn/du + v dn/dv of §6.2), with a
-// and b fixed: that is the whole Newton system of a one-vertex chain. The angle form is differentiated
-// exactly by forward-mode dual numbers, so no hand-derived formula can drift from the value.
+// and b fixed: that is the whole Newton system of a one-vertex chain. chainConstraint() adds the derivatives with
+// respect to the neighbours' charts, the off-diagonal blocks of a chain of several vertices. The angle form is
+// differentiated exactly by forward-mode dual numbers, so no hand-derived formula can drift from the value.
 #pragma once
 #include <optional>
 
@@ -37,10 +38,18 @@ struct ConstraintJet {
 std::optional<ConstraintJet> angleDifferenceConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b,
                                                        const Frame *frame = nullptr);
 
+// The constraint at a vertex v of a chain prev -> v -> next of several specular vertices with its three blocks
+// of ∇C, with respect to the charts of prev, v and next (zero for a vertex without chart): the block row of v
+// in the block-tridiagonal Newton system of the chain (block_tridiagonal.h, [SMS §5.6], [TR §3.3]).
+struct ChainConstraint {
+    Vec2 value;
+    Mat2 prev, self, next;
+};
+// The angle form's `frame` as in angleDifferenceConstraint() (the half-vector form has none).
+std::optional<ChainConstraint> chainConstraint(SmsConstraint form, const ManifoldVertex &prev, const ManifoldVertex &v,
+                                               const ManifoldVertex &next, const Frame *frame = nullptr);
+
 // The half-vector constraint T^T h at v and its diagonal block of ∇C (specular_constraint.h).
 std::optional<ConstraintJet> halfVectorConstraint(const Vec3 &a, const ManifoldVertex &v, const Vec3 &b);
-
-std::optional<ConstraintJet> specularConstraint(SmsConstraint form, const Vec3 &a, const ManifoldVertex &v,
-                                                const Vec3 &b);
 
 }  // namespace pf

@@ -1,5 +1,5 @@
-// Specular manifold sampling of one-vertex chains (ALGORITHMS.md §7.1, [SMS §4-5]; what the reference code
-// gets wrong and this file does not copy: SMS_PORTAL_NOTES.md §1.1, §1.7).
+// Specular manifold sampling of chains of one or two specular vertices (ALGORITHMS.md §7.1, [SMS §4-5]; what the
+// reference code gets wrong and this file does not copy: SMS_PORTAL_NOTES.md §1.1, §1.7).
 //
 // Given a receiver point x_1 (a non-specular surface point) and an emitter point x_3, the specular vertices
 // x_2 on a caster shape with C(x_2) = 0 (angle_constraint.h) are the chains x_1 -> x_2 -> x_3 that scatter
@@ -11,6 +11,13 @@
 // scattered direction about the shading normal equal to the direction to x_3 (this rejects the back-facing
 // roots of the half-vector form, [SMS Fig. 7]).
 //
+// A chain of two vertices x_1 -> x_2 -> x'_2 -> x_3 (the two refractions through a glass sphere, [SMS §5.6]) is
+// seeded with the uniform point on the caster for x_2 and the first surface along the ideal specular direction
+// out of it for x'_2 ([SMS §4.7]); Newton solves the block-tridiagonal system of both vertices' constraints
+// (chainConstraint() in angle_constraint.h, block_tridiagonal.h), reprojects by tracing from x_1 through the
+// proposed x_2 and from that hit through the proposed x'_2, and post-checks both events. x_2 must lie on the
+// caster, x'_2 on any ideally specular shape.
+//
 // The sum over all solutions, Σ_k f(x_2,k), is then estimated in one of two ways:
 // * unbiased ([SMS §5.1]): a first trial finds x*_k with unknown probability p_k; independent trials of the
 //   same (x_1, x_3) then run until one finds the same solution again, and the number of those trials N
@@ -20,12 +27,14 @@
 //   code, SMS_PORTAL_NOTES.md §1.7.1).
 // * biased ([SMS §5.2]): `trials` = M trials, and the sum of f over the distinct solutions found. Its
 //   expectation is at most the sum; the loss shrinks as M grows.
-// Two solutions are the same when their directions from x_1 differ by |cos α - 1| < uniquenessThreshold.
+// Two solutions are the same when their directions from x_1 differ by |cos α - 1| < uniquenessThreshold (the
+// first vertex decides the rest of a solved chain).
 #pragma once
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <vector>
 
 #include "core/sampler.h"
 #include "core/spectrum.h"
@@ -65,20 +74,28 @@ struct SmsStatistics {
 // reflection and/or transmission lobes).
 Scattering specularEvent(const Shape &caster);
 
-// One trial: a seed on `caster` and Newton's method from it. Returns the intersection at the solution x_2
-// (its.wi faces x_1), or nullopt when the trial fails. x1 is the receiver's intersection.
+// A solved chain's specular vertices in order from x_1 (each its.wi faces its predecessor).
+using SpecularChain = std::vector<Intersection>;
+
+// One trial for a chain of `vertices` (1 or 2) specular vertices whose first is on `caster`: a seed and Newton's
+// method from it. nullopt when the trial fails. x1 is the receiver's intersection.
+std::optional<SpecularChain> solveSpecularChain(const Scene &scene, const Intersection &x1, const Vec3 &x3,
+                                                const Shape &caster, int vertices, const SmsSettings &settings,
+                                                Sampler &sampler);
+// The one-vertex trial: the solution x_2 (its.wi faces x_1).
 std::optional<Intersection> solveSpecularVertex(const Scene &scene, const Intersection &x1, const Vec3 &x3,
                                                 const Shape &caster, const SmsSettings &settings, Sampler &sampler);
 
-// The generalized geometry term of the solved chain x_1 -> x_2 -> x_3 divided by the geometric cosine at x_1:
+// The generalized geometry term of the solved chain x_1 -> x_2 (-> x'_2) -> x_3 divided by the geometric cosine at x_1:
 // the solid angle at x_1 per unit area at x_3 (per unit intensity for a point x_3, a FixedPosition vertex),
 // through the caster's constraint Jacobian (generalized_geometry.h). nullopt on a singular chain.
-std::optional<double> specularChainGeometry(const Intersection &x1, const Intersection &x2, const ManifoldVertex &x3);
+std::optional<double> specularChainGeometry(const Intersection &x1, const SpecularChain &chain,
+                                            const ManifoldVertex &x3);
 
-// The SMS estimate of Σ_k f(x_2,k) over the solutions on `caster` (see above). f gets the solution's
-// intersection and returns its contribution (visibility included, if wanted).
-Spectrum manifoldSum(const Scene &scene, const Intersection &x1, const Vec3 &x3, const Shape &caster,
+// The SMS estimate of Σ_k f(chain_k) over the solutions of `vertices` vertices whose first is on `caster` (see
+// above). f gets the solution and returns its contribution (visibility included, if wanted).
+Spectrum manifoldSum(const Scene &scene, const Intersection &x1, const Vec3 &x3, const Shape &caster, int vertices,
                      const SmsSettings &settings, Sampler &sampler, SmsStatistics &stats,
-                     const std::function<Spectrum(const Intersection &x2)> &f);
+                     const std::function<Spectrum(const SpecularChain &chain)> &f);
 
 }  // namespace pf
