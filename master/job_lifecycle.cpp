@@ -219,7 +219,7 @@ void Master::recoverJob(const StoredJob &stored) {
     for (const std::string &w : store_.loadBlocklist(id)) j.blocklist.insert(w);
     for (const StoredResult &r : store_.loadUnmergedResults(id)) {
         const v1::TaskSpec &work = j.tasks.at(static_cast<size_t>(r.taskIndex)).work;
-        j.film.pending[r.taskIndex] = {r.file, r.stats, work};
+        j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0};
         if (r.taskIndex >= j.chainFirst) {
             j.taskSeconds += r.stats.seconds();
             ++j.taskCount;

@@ -188,6 +188,8 @@ private:
     TaskOutput decodeOutput(const JobRuntime &j, const pathfarm::v1::TaskSpec &work, std::string_view payload) const;
     // Film side: called with the job's film mutex held.
     void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh);
+    // The memory a decoded result holds while it waits for its turn (0: not worth holding).
+    static size_t heldBytes(const TaskOutput &output);
     void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
     // The pending result of `task` is lost: the task goes back to the queue (takes mu_).
     void discardResult(JobRuntime &j, int64_t task, const std::string &file);

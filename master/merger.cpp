@@ -114,8 +114,15 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
     if (!accepted) return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
     {
         const std::lock_guard<std::mutex> filmLock(j->film.mu);
-        j->film.pending[task] = {file.string(), stats, work};
-        mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
+        JobFilm &f = j->film;
+        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0};
+        if (task == f.merged) {
+            mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
+        } else if (const size_t bytes = heldBytes(*output); bytes > 0 && f.heldBytes + bytes <= JobFilm::kHeldBytes) {
+            p.output = std::move(*output);
+            p.bytes = bytes;
+            f.heldBytes += bytes;
+        }
     }
     v1::CompleteReply reply;
     reply.set_accepted(true);
@@ -145,6 +152,15 @@ Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec 
     return block;
 }
 
+size_t Master::heldBytes(const TaskOutput &output) {
+    // Image and chain results are film blocks; seeding results are merged first and never wait long.
+    const ImageBlock *block = std::holds_alternative<ImageBlock>(output)    ? &std::get<ImageBlock>(output)
+                              : std::holds_alternative<ChainResult>(output) ? &std::get<ChainResult>(output).film
+                                                                            : nullptr;
+    if (!block) return 0;
+    return sizeof(double) * (block->sumData().size() + block->weightData().size() + block->splatData().size());
+}
+
 void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh) {
     JobFilm &f = j.film;
     if (!f.open()) return;
@@ -161,6 +177,9 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
         std::optional<TaskOutput> output;
         if (fresh && fresh->first == f.merged) {
             output.emplace(std::move(fresh->second));
+        } else if (it->second.output) {
+            output = std::move(it->second.output);
+            f.heldBytes -= it->second.bytes;
         } else {
             try {
                 output.emplace(decodeOutput(j, work, readFilmFile(it->second.file)));
@@ -346,6 +365,7 @@ void Master::closeFilm(JobRuntime &j) {
     f.block.reset();
     f.chain.reset();
     f.pending.clear();
+    f.heldBytes = 0;
     fs::remove_all(fs::path(jobDir(j.record.id())) / "results", ec);
 }
 

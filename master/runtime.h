@@ -73,8 +73,15 @@ struct Master::JobFilm {
         std::string file;
         pathfarm::v1::TaskStats stats;
         pathfarm::v1::TaskSpec work;
+        // The result as complete() decoded it, kept while the film's held bytes stay within kHeldBytes, so that
+        // a result that arrives before its turn is not read back and decoded a second time when its turn comes
+        // (with many workers most results arrive out of order). Without it the file is read.
+        std::optional<TaskOutput> output;
+        size_t bytes = 0;
     };
     std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
+    static constexpr size_t kHeldBytes = size_t{128} << 20;
+    size_t heldBytes = 0;  // of the pending outputs held in memory
     // Their result files, deleted once checkpointed (a chain job's seeding results are kept: they are
     // merged again after a restart).
     std::vector<std::string> mergedSinceCheckpoint;
@@ -109,7 +116,7 @@ struct Master::JobRuntime {
     // Every attempt -> the worker it was leased to: only that worker's result is taken, also after the
     // lease expired (a worker cannot deliver for a task it never leased).
     std::map<int64_t, std::string> attemptWorker;
-    bool filmOpen = false;                   // the film still holds memory or result files to release once the job ends
+    bool filmOpen = false;  // the film still holds memory or result files to release once the job ends
     JobFilm film;
 };
 
