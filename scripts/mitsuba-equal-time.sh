@@ -6,9 +6,10 @@
 #   scripts/mitsuba-equal-time.sh MITSUBA SCENE.xml INTEGRATOR SECONDS RES OUT.exr [THREADS]
 #
 # Mitsuba 0.6 has no wall-time budget for its sampling integrators, so the budget becomes a sample count:
-# two short probe renders (1 and 4 samples per pixel; for Mitsuba's mlt/pssmlt/erpt the sampler's
-# sampleCount is mutations per pixel) separate the fixed start-up cost (loading, kd-tree, seeding) from the
-# cost per sample, and the final render gets the count that fills SECONDS. The scene is rendered from a
+# probe renders (1 sample per pixel, then 4, 16, ... until a probe's extra samples take a tenth of the budget;
+# for Mitsuba's mlt/pssmlt/erpt the sampler's sampleCount is mutations per pixel) separate the fixed start-up
+# cost (loading, kd-tree, seeding) from the cost per sample, and the final render gets the count that fills
+# SECONDS. The scene is rendered from a
 # rewritten copy (integrator type, sampleCount, film width and height = RES; the scene's other files are
 # linked), so the file itself is untouched. Prints the count and the measured wall time; compare with
 #   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
@@ -54,14 +55,19 @@ timed() {
 }
 
 rewrite 1
-rewrite 4
 T1=$(timed 1 "$WORK/probe1.exr")
-T4=$(timed 4 "$WORK/probe4.exr")
+N=4
+while :; do
+    rewrite "$N"
+    TN=$(timed "$N" "$WORK/probe$N.exr")
+    python3 -c "import sys; sys.exit(0 if $TN - $T1 >= $SECONDS_ / 10 or $N >= 65536 else 1)" && break
+    N=$((N * 4))
+done
 COUNT=$(python3 -c "
-t1, t4, budget = $T1, $T4, $SECONDS_
-per = max((t4 - t1) / 3, 1e-6)
+t1, tn, n, budget = $T1, $TN, $N, $SECONDS_
+per = max((tn - t1) / (n - 1), 1e-6)
 setup = max(t1 - per, 0)
 print(max(1, int((budget - setup) / per)))")
 rewrite "$COUNT"
 T=$(timed "$COUNT" "$OUT")
-echo "mitsuba $INTEGRATOR: $COUNT samples per pixel at ${RES}x${RES} in $T s with $THREADS threads (probes: 1 spp $T1 s, 4 spp $T4 s) -> $OUT"
+echo "mitsuba $INTEGRATOR: $COUNT samples per pixel at ${RES}x${RES} in $T s with $THREADS threads (probes: 1 spp $T1 s, $N spp $TN s) -> $OUT"
