@@ -10,8 +10,9 @@
 # for Mitsuba's mlt/pssmlt/erpt the sampler's sampleCount is mutations per pixel) separate the fixed start-up
 # cost (loading, kd-tree, seeding) from the cost per sample, and the final render gets the count that fills
 # SECONDS. The scene is rendered from a
-# rewritten copy (integrator type, sampleCount, film width and height = RES; the scene's other files are
-# linked), so the file itself is untouched. Prints the count and the measured wall time; compare with
+# rewritten copy (integrator type, sampleCount, film width and height = RES, scene version 0.6.0, ldrfilm
+# as hdrfilm; the scene's other files are linked), so the file itself is untouched and pathfarm renders it
+# as it is. Prints the count and the measured wall time; compare with
 #   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
 #       --reference REF.exr --image mitsuba=OUT.exr SCENE.xml
 set -euo pipefail
@@ -40,6 +41,10 @@ xml = open(src).read()
 xml = re.sub(r'<integrator\s+type="[^"]*"', f'<integrator type="{integrator}"', xml, count=1)
 xml = re.sub(r'(<integer\s+name="sampleCount"\s+value=")[^"]*"', rf'\g<1>{count}"', xml)
 xml = re.sub(r'(<integer\s+name="(?:width|height)"\s+value=")[^"]*"', rf'\g<1>{res}"', xml)
+# Mitsuba 0.6 refuses 0.5.0 files (its upgrade stylesheet only bumps the version), and an ldrfilm writes no
+# EXR: the film becomes an hdrfilm without the ldrfilm's own properties.
+xml = xml.replace('version="0.5.0"', 'version="0.6.0"').replace('type="ldrfilm"', 'type="hdrfilm"')
+xml = re.sub(r'\s*<(?:string|float)\s+name="(?:fileFormat|gamma|exposure|tonemapMethod|key|burn)"[^>]*/>', '', xml)
 open(dst, "w").write(xml)
 PY
 }

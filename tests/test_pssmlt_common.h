@@ -20,6 +20,7 @@
 #include "integrators/integrator.h"
 #include "scene/scene.h"
 #include "support/render_util.h"
+#include "support/seed_stats.h"
 
 namespace pf::test {
 
@@ -88,11 +89,7 @@ inline BlockStats blockStatsOf(const Scene &scene, int block, int seeds, uint64_
         add(sum.size() - 1, regionMean(img, 0, 0, nx * block, ny * block).mean);
     }
     BlockStats r;
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double mean = sum[i] / seeds;
-        r.mean.push_back(mean);
-        r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
-    }
+    seedMeanAndError(sum, sum2, seeds, r.mean, r.stderr_);
     return r;
 }
 

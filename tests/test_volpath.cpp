@@ -22,6 +22,7 @@
 
 #include "integrators/integrator.h"
 #include "support/render_util.h"
+#include "support/seed_stats.h"
 
 namespace pf::test {
 namespace {
@@ -228,11 +229,7 @@ BlockStats blockStats(const std::string &scenePath, const std::string &integrato
             }
     }
     BlockStats r;
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double mean = sum[i] / seeds;
-        r.mean.push_back(mean);
-        r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
-    }
+    seedMeanAndError(sum, sum2, seeds, r.mean, r.stderr_);
     return r;
 }
 

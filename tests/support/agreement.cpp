@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "support/render_util.h"
+#include "support/seed_stats.h"
 
 namespace pf::test {
 
@@ -69,11 +70,7 @@ BlockStats blockStats(const Scene &scene, const Integrator &integrator, int bloc
         sum2.back() += v * v;
     }
     BlockStats r;
-    for (size_t i = 0; i < sum.size(); ++i) {
-        const double mean = sum[i] / seeds;
-        r.mean.push_back(mean);
-        r.stderr_.push_back(std::sqrt(std::max(0.0, sum2[i] / seeds - mean * mean) / (seeds - 1)));
-    }
+    seedMeanAndError(sum, sum2, seeds, r.mean, r.stderr_);
     return r;
 }
 
