@@ -42,6 +42,8 @@ std::unique_ptr<Integrator> fileIntegrator(const Scene &scene, const std::string
 // light is seen through the gold mirror only by paths that hit it by chance (x15 in size, same radiance),
 // and the volumetric caustic's 5 x 4 mm light only through the glass sphere (x40, radiance / 1600).
 struct SharedScene {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const SharedScene &c, std::ostream *os) { *os << c.name; }
     std::string name;
     std::vector<Edit> edits;
     int resolution, referenceSpp, bdptSpp;

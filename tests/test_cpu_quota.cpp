@@ -51,6 +51,8 @@ const std::string kOtherMounts =
 // One cgroup layout: the fake /proc/self/mountinfo and /proc/self/cgroup ("@" stands for the fake tree's
 // root), the files of the tree, and the limit and thread count they must give.
 struct Layout {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Layout &c, std::ostream *os) { *os << c.name; }
     const char *name;
     std::string mountinfo, cgroup;
     std::vector<std::pair<std::string, std::string>> files;

@@ -10,6 +10,10 @@ namespace pf::test {
 namespace {
 
 struct DefaultsCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const DefaultsCase &c, std::ostream *os) {
+        *os << c.scene << (c.separateDirect ? " separateDirect" : "");
+    }
     std::string scene;
     bool separateDirect;
 };
@@ -33,6 +37,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, LongERPTConvergence,
                          });
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " mutation " << static_cast<int>(c.type); }
     std::string scene;
     MutationType type;
 };

@@ -10,6 +10,8 @@ namespace pf::test {
 namespace {
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " " << c.label; }
     std::string scene, label;
     std::vector<std::pair<std::string, std::string>> params;
     int mutationsPerPixel;

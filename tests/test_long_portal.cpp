@@ -9,6 +9,8 @@ namespace pf::test {
 namespace {
 
 struct LongCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const LongCase &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int mutationsPerPixel, maxDepth;
 };

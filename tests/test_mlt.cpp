@@ -21,6 +21,8 @@ namespace pf::test {
 namespace {
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int mutationsPerPixel;
 };

@@ -282,6 +282,8 @@ int distinctSolutions(const Scene &scene, const Intersection &x1, const Vec3 &x3
 }
 
 struct CountCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const CountCase &c, std::ostream *os) { *os << c.name; }
     std::string name, caster;
     Vec3 receiverFrom, light;
     double floorY;
@@ -544,6 +546,8 @@ std::unique_ptr<Integrator> integrator(const Scene &scene, const std::string &ty
 }
 
 struct RenderCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const RenderCase &c, std::ostream *os) { *os << c.name; }
     std::string name, scene;
     std::vector<Edit> edits;
     int resolution, pathSpp, smsSpp;

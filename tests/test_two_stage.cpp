@@ -137,6 +137,8 @@ void printErrors(const std::string &what, const BlockStats &one, const BlockStat
 }
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " " << c.integrator; }
     std::string scene, integrator;
     int mutationsPerPixel;
 };
