@@ -10,6 +10,7 @@
 #include "mcmc/pss_integrator.h"
 #include "render/normalizer.h"
 #include "support/chi2.h"
+#include "support/seed_stats.h"
 #include "test_pssmlt_common.h"
 
 namespace pf::test {
@@ -157,6 +158,49 @@ TEST_P(Seeding, ChainsStartOnTheirCandidates) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Seeding, ::testing::Values("cornell-box", "veach-mis", "veach-bidir"));
+
+// Sparse seeding (luminanceSamples below one per pixel, render/seeding.h): one pixel of each run of
+// pixelStride is seeded, weighted by the run's length. At 96² (three seeding tasks of 4096 pixels) a stride
+// of 7 makes runs straddle the tasks: every run must be seeded exactly once, by one pixel, and b̂'s mean over
+// seeds must agree with dense seeding's (one sample in every pixel). Dropping the length factor would make
+// b̂ 7 times too small; picking a pixel other than uniformly would bias it where the image varies.
+TEST(SparseSeeding, OnePixelPerRunAndUnbiasedLuminance) {
+    constexpr int kRes = 96, kSeeds = 16;
+    constexpr uint64_t kPixels = kRes * kRes, kStride = 7;
+    auto scene = loadChainTestScene("cornell-box", kRes);
+    const auto pssmlt = makeTestIntegrator(
+        *scene, "pssmlt", {{"directSamples", "-1"}, {"luminanceSamples", std::to_string(kPixels / kStride)}});
+    const SeedingConfig sparse = asPSS(*pssmlt).seeding(*scene);
+    ASSERT_EQ(sparse.pixelStride, kStride);
+    ASSERT_EQ(sparse.samplesPerPixel, 1);
+    SeedingConfig dense = sparse;
+    dense.pixelStride = 1;
+
+    uint64_t samples = 0;
+    std::map<uint64_t, uint64_t> pixelOfRun;  // the full film is the crop window: record pixel = crop index
+    for (const SeedingTask &t : seedingTasks(*scene)) {
+        const SeedingResult r = runSeedingTask(*scene, sparse, kSeed, t);
+        samples += r.samples;
+        for (const SeedCandidate &c : r.candidates) {
+            const auto [it, fresh] = pixelOfRun.emplace(c.record.pixel / kStride, c.record.pixel);
+            EXPECT_TRUE(fresh || it->second == c.record.pixel) << "run " << it->first << " seeded twice";
+        }
+    }
+    EXPECT_EQ(samples, (kPixels + kStride - 1) / kStride);
+    EXPECT_GT(pixelOfRun.size(), samples / 4) << "too few runs hold a path to have tested anything";
+
+    std::vector<double> sum(2, 0.0), sum2(2, 0.0), mean, error;
+    for (int k = 0; k < kSeeds; ++k)
+        for (int d = 0; d < 2; ++d) {
+            const double b = seedAll(*scene, d ? dense : sparse, kSeed + 101 * static_cast<uint64_t>(k)).luminance();
+            sum[d] += b;
+            sum2[d] += b * b;
+        }
+    seedMeanAndError(sum, sum2, kSeeds, mean, error);
+    std::printf("b: sparse %.5g +- %.2g, dense %.5g +- %.2g\n", mean[0], error[0], mean[1], error[1]);
+    EXPECT_LT(error[0], 0.05 * mean[0]) << "too noisy to test the weights";
+    EXPECT_NEAR(mean[0], mean[1], 4 * std::hypot(error[0], error[1]));
+}
 
 }  // namespace
 }  // namespace pf::test

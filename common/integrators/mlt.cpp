@@ -19,7 +19,7 @@ namespace {
 
 // The parameter that enables each mutation type, in MutationType order.
 constexpr const char *kMutationParameters[kMutationTypes] = {
-    "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",          "causticPerturbation",
+    "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",           "causticPerturbation",
     "multiChainPerturbation", "manifoldPerturbation", "mediumDistancePerturbation", "portalPerturbation"};
 
 // The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
@@ -162,9 +162,8 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
 }
 
 SeedingConfig MLT::seeding(const Scene &scene, int64_t) const {
-    const Film &film = scene.sensor().film();
-    const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
-    SeedingConfig config = seedingWith(std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels));
+    SeedingConfig config = seedingWith(1);
+    spreadLuminanceSamples(config, scene.sensor().film(), luminanceSamples_);
     config.firstStageReduction = firstStageReduction_;
     return config;
 }

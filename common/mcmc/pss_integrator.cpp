@@ -47,10 +47,9 @@ PrimarySampleIntegrator::PrimarySampleIntegrator(const Properties &props) {
 }
 
 SeedingConfig PrimarySampleIntegrator::seeding(const Scene &scene, int64_t) const {
-    const Film &film = scene.sensor().film();
-    const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
-    return {bdpt_.get(), std::max<int64_t>(1, (luminanceSamples_ + pixels - 1) / pixels), minDepth(),
-            firstStageReduction_};
+    SeedingConfig config{bdpt_.get(), 1, minDepth(), firstStageReduction_};
+    spreadLuminanceSamples(config, scene.sensor().film(), luminanceSamples_);
+    return config;
 }
 
 PrimarySampleIntegrator::StartedChain PrimarySampleIntegrator::startChain(const Scene &scene, uint64_t jobSeed,

@@ -63,21 +63,47 @@ void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, 
     });
 }
 
+void spreadLuminanceSamples(SeedingConfig &config, const Film &film, int64_t luminanceSamples) {
+    const int64_t pixels = static_cast<int64_t>(film.cropWidth()) * film.cropHeight();
+    const int64_t samples = std::max<int64_t>(1, luminanceSamples);
+    config.samplesPerPixel = std::max<int64_t>(1, (samples + pixels - 1) / pixels);
+    config.pixelStride = samples < pixels ? static_cast<uint64_t>(pixels / samples) : 1;
+}
+
+uint64_t seedPixelOfRun(uint64_t seed, uint64_t runStart, uint64_t runLength) {
+    if (runLength <= 1) return runStart;
+    // A stream no render draws from (sample index 2^64 - 1), so the choice is independent of the samples.
+    IndependentSampler sampler(seed, runStart, ~uint64_t{0});
+    return runStart + std::min(runLength - 1, static_cast<uint64_t>(sampler.next1D() * static_cast<double>(runLength)));
+}
+
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task) {
     if (task.pilotSamples > 0) return runPilot(scene, config, seed, task.pilotSamples);
     const auto start = std::chrono::steady_clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
     const Film &film = scene.sensor().film();
+    const uint64_t pixels = static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
+    const uint64_t end = task.firstPixel + task.pixelCount, stride = std::max<uint64_t>(1, config.pixelStride);
     const double perSample = 1.0 / static_cast<double>(config.samplesPerPixel);
     SeedingResult result;
-    if (config.firstStageReduction > 0) result.firstStage = FirstStageImage::zero(film, config.firstStageReduction);
-    for (uint64_t i = task.firstPixel; i < task.firstPixel + task.pixelCount; ++i)
-        for (int64_t k = 0; k < config.samplesPerPixel; ++k) {
-            seedSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, true, result);
-            if (result.firstStage.enabled())
+    // Two-stage MLT's first stage covers every pixel whatever the seeding's stride: a cell without samples
+    // would hold no luminance.
+    if (config.firstStageReduction > 0) {
+        result.firstStage = FirstStageImage::zero(film, config.firstStageReduction);
+        for (uint64_t i = task.firstPixel; i < end; ++i)
+            for (int64_t k = 0; k < config.samplesPerPixel; ++k)
                 firstStageSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, result);
-        }
-    result.samples = task.pixelCount * static_cast<uint64_t>(config.samplesPerPixel);
+    }
+    // The runs that start in this task's pixels, so every run belongs to exactly one task.
+    uint64_t runs = 0;
+    for (uint64_t run = (task.firstPixel + stride - 1) / stride * stride; run < end; run += stride, ++runs) {
+        const uint64_t length = std::min(stride, pixels - run);
+        const uint64_t pixel = filmPixel(film, seedPixelOfRun(seed, run, length));
+        for (int64_t k = 0; k < config.samplesPerPixel; ++k)
+            seedSample(scene, config, seed, pixel, static_cast<uint64_t>(k), perSample * static_cast<double>(length),
+                       true, result);
+    }
+    result.samples = runs * static_cast<uint64_t>(config.samplesPerPixel);
     result.rays = Scene::threadRayCount() - rays0;
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

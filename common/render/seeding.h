@@ -35,6 +35,11 @@ struct SeedingConfig {
     int minDepth = 1;
     // Two-stage MLT (render/two_stage.h): the first stage's size reduction; 0: one stage.
     int firstStageReduction = 0;
+    // Sparse seeding, for budgets of fewer samples than pixels (Mitsuba's luminanceSamples at 1024²): the crop
+    // window's pixels, row-major, fall into runs of pixelStride (the last one shorter); one pixel drawn
+    // uniformly from each run takes the samples and stands for its run, its weights multiplied by the run's
+    // length, so b̂ stays unbiased (E[length * L(pick)] = sum of the run's L). 1: every pixel.
+    uint64_t pixelStride = 1;
 };
 
 // Crop-window pixels [firstPixel, firstPixel + pixelCount) in row-major order; or, when pilotSamples > 0,
@@ -74,6 +79,13 @@ void forEachSeedStrategy(const Scene &scene, const SeedingConfig &config, uint64
                          uint64_t sampleIndex, double scale,
                          const std::function<void(const StrategySample &, double)> &fn);
 
+// Sets config's samplesPerPixel and pixelStride to spend at least `luminanceSamples` BDPT samples on the crop
+// window: whole samples per pixel, or, below one per pixel, one sample per run of pixels (sparse seeding;
+// Mitsuba's default 100000 at 1024² is a tenth of a sample per pixel).
+void spreadLuminanceSamples(SeedingConfig &config, const Film &film, int64_t luminanceSamples);
+// Sparse seeding's pick: the crop index of the pixel that stands for the run of `runLength` pixels from crop
+// index `runStart` (uniform over the run, a pure function of the job seed and the run).
+uint64_t seedPixelOfRun(uint64_t seed, uint64_t runStart, uint64_t runLength);
 // The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.
 uint64_t filmPixel(const Film &film, uint64_t cropIndex);
 // The raster position of a pixel sample, drawn from `sampler` as the render loop draws it (two numbers,
