@@ -78,6 +78,8 @@ struct Master::JobFilm {
         // (with many workers most results arrive out of order). Without it the file is read.
         std::optional<TaskOutput> output;
         size_t bytes = 0;
+        // A batched result holds tasks [index, index + tasks), and `work` their samples together.
+        int64_t tasks = 1;
     };
     std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
     static constexpr size_t kHeldBytes = size_t{128} << 20;

@@ -281,19 +281,22 @@ void Store::ignoreAttempt(int64_t attempt, int64_t nowMs) {
         .run();
 }
 
-void Store::acceptResult(int64_t job, int64_t task, int64_t attempt, const std::string &file, uint64_t bytes,
-                         const TaskStats &stats, int64_t nowMs) {
+void Store::acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &attempts, const std::string &file,
+                         uint64_t bytes, const TaskStats &stats, int64_t nowMs) {
     const std::lock_guard<std::mutex> lock(mu_);
     Transaction tx(db_);
-    Stmt(db_, "UPDATE attempts SET state = ?, finished_ms = ? WHERE id = ?")
-        .bind(attempt_state::kCompleted, nowMs, attempt)
-        .run();
-    Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?").bind(task_state::kAccepted, job, task).run();
-    Stmt(db_,
-         "INSERT INTO results (job_id, task_idx, attempt_id, file, bytes, stats, accepted_ms) VALUES (?, ?, ?, ?, ?, "
-         "?, ?)")
-        .bind(job, task, attempt, file, bytes, serialize(stats), nowMs)
-        .run();
+    Stmt attempt(db_, "UPDATE attempts SET state = ?, finished_ms = ? WHERE id = ?");
+    Stmt accept(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?");
+    Stmt insert(db_,
+                "INSERT INTO results (job_id, task_idx, attempt_id, file, bytes, stats, accepted_ms) VALUES (?, ?, ?, "
+                "?, ?, ?, ?)");
+    for (size_t i = 0; i < attempts.size(); ++i) {
+        const int64_t t = task + static_cast<int64_t>(i);
+        attempt.bind(attempt_state::kCompleted, nowMs, attempts[i]).run();
+        accept.bind(task_state::kAccepted, job, t).run();
+        insert.bind(job, t, attempts[i], file, i == 0 ? bytes : 0, serialize(i == 0 ? stats : TaskStats()), nowMs)
+            .run();
+    }
     tx.commit();
 }
 
