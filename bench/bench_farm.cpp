@@ -2,7 +2,7 @@
 // passes or fails on time.
 //
 //   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
-//              [--fake-batch N[,N...]]
+//              [--fake-batch N[,N...]] [--task-seconds S]
 //   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res,
 //   batches of 1)
 //
@@ -21,7 +21,8 @@
 //    saturating task rate its CPU per task, the tasks per second it sustains, the bytes per task on the
 //    wire, and the 8-core workers that implies (their task time from part 1). With --fake-batch N the
 //    fake workers lease N tasks at once and return them as one result (pathfarm-worker --batch N); a
-//    list of sizes runs part 4 once per size, each with a fresh master.
+//    list of sizes runs part 4 once per size, each with a fresh master. --task-seconds S: also the 8-core
+//    workers one master keeps busy at tasks of S seconds (e.g. part 1's smallest task, under --fake-only).
 #include <unistd.h>
 
 #include <atomic>
@@ -201,7 +202,7 @@ private:
 // with the time an 8-core worker takes per pixel sample (0: unknown), the workers of 8 cores that one
 // master keeps busy. `results` is filled on the first call (the rendering takes a while).
 void saturate(const std::string &scene, int res, int workers, int64_t tasks, double sampleSeconds8, int batch,
-              std::map<int64_t, std::string> &results) {
+              double taskSeconds, std::map<int64_t, std::string> &results) {
     test::farm::Farm farm("bench-saturate");
     const std::string copy = resizedCopy(scene, res, farm.dir() + "/scene");
     int64_t spp = 0;
@@ -257,6 +258,9 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
     std::printf("  tasks per CPU-second:      %8.1f  (what one master core sustains)\n", n / cpu);
     std::printf("  bytes per task:            %8.0f  (protobuf messages both ways, heartbeats included)\n",
                 static_cast<double>(bytes) / n);
+    if (taskSeconds > 0)
+        std::printf("  8-core workers per master:  %7.0f at tasks of %.3f s; goal >= 500\n", taskSeconds / (cpu / n),
+                    taskSeconds);
     if (sampleSeconds8 <= 0) return;
     // This job's tasks are mostly of the largest size (render/image_task.h); a job as short as part 1's
     // has only small ones.
@@ -367,6 +371,7 @@ int main(int argc, char **argv) {
     int res = 256, spp = 64, fakeWorkers = 32, fakeRes = 0;  // 0: --res
     int64_t fakeTasks = 400;
     std::vector<int> batches{1};
+    double taskSeconds = 0;
     bool fakeOnly = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -385,6 +390,8 @@ int main(int argc, char **argv) {
             batches.clear();
             std::stringstream list(argv[++i]);
             for (std::string n; std::getline(list, n, ',');) batches.push_back(std::stoi(n));
+        } else if (a == "--task-seconds" && value) {
+            taskSeconds = std::stod(argv[++i]);
         } else if (a == "--fake-only") {
             fakeOnly = true;
         } else if (a.rfind("--", 0) == 0) {
@@ -397,6 +404,7 @@ int main(int argc, char **argv) {
     const double sampleSeconds8 = fakeOnly ? 0 : realFarm(scene, res, spp);
     std::map<int64_t, std::string> results;
     for (const int batch : batches)
-        saturate(scene, fakeRes > 0 ? fakeRes : res, fakeWorkers, fakeTasks, sampleSeconds8, batch, results);
+        saturate(scene, fakeRes > 0 ? fakeRes : res, fakeWorkers, fakeTasks, sampleSeconds8, batch, taskSeconds,
+                 results);
     return 0;
 }

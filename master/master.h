@@ -181,10 +181,10 @@ private:
     void expire(Clock::time_point now);
     // Under mu_.
     std::optional<pathfarm::v1::TaskSpec> pickTask(WorkerRuntime &w);
-    // Leases task `index` of the job to the worker (a new attempt). Throws StorageError.
-    pathfarm::v1::TaskSpec leaseIndex(JobRuntime &j, WorkerRuntime &w, int64_t index);
-    // For a batch: a lease of task `index`, if it is the task the worker would get next from this job.
-    std::optional<pathfarm::v1::TaskSpec> leaseFollowing(JobRuntime &j, WorkerRuntime &w, int64_t index);
+    // Leases the job's tasks `indices` to the worker (a new attempt each, stored in one transaction).
+    // Throws StorageError (the tasks are then queued again).
+    std::vector<pathfarm::v1::TaskSpec> leaseIndices(JobRuntime &j, WorkerRuntime &w,
+                                                     const std::vector<int64_t> &indices);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
     bool mayIssue(JobRuntime &j);
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
@@ -237,6 +237,10 @@ private:
     farm::BundleStore bundles_;
     Store store_;
     mutable std::mutex sceneLoadMu_;  // one scene load at a time bounds the master's memory
+    // Decompression buffers of decodeOutput, reused for the reason of JobFilm::spareBlocks.
+    mutable std::mutex scratchMu_;
+    mutable std::vector<std::vector<unsigned char>> scratch_;
+    static constexpr size_t kSpareScratch = 4;
 
     mutable std::mutex mu_;
     mutable std::condition_variable workChanged_;  // a task may have become available

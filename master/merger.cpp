@@ -169,9 +169,27 @@ Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec 
     const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
     if (work.has_seeding()) return farm::decodeSeedingResult(payload, film, farm::fromProto(work.seeding()));
     if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
-    ImageBlock block = emptyBlock();
-    farm::decodeBlock(payload, block);
-    return block;
+    std::optional<ImageBlock> block;
+    {
+        const std::lock_guard<std::mutex> lock(j.film.spareMu);
+        if (!j.film.spareBlocks.empty()) {
+            block.emplace(std::move(j.film.spareBlocks.back()));
+            j.film.spareBlocks.pop_back();
+        }
+    }
+    if (!block) block.emplace(emptyBlock());
+    std::vector<unsigned char> scratch;
+    {
+        const std::lock_guard<std::mutex> lock(scratchMu_);
+        if (!scratch_.empty()) {
+            scratch = std::move(scratch_.back());
+            scratch_.pop_back();
+        }
+    }
+    farm::decodeBlock(payload, *block, scratch);
+    const std::lock_guard<std::mutex> lock(scratchMu_);
+    if (scratch_.size() < kSpareScratch) scratch_.push_back(std::move(scratch));
+    return std::move(*block);
 }
 
 size_t Master::heldBytes(const TaskOutput &output) {
@@ -294,8 +312,11 @@ void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput out
         mergeChainOutput(f, work, std::move(output));
         return;
     }
-    f.block->merge(std::get<ImageBlock>(output));
+    ImageBlock &block = std::get<ImageBlock>(output);
+    f.block->merge(block);
     f.spp += work.image().sample_count();
+    const std::lock_guard<std::mutex> lock(f.spareMu);
+    if (f.spareBlocks.size() < JobFilm::kSpareBlocks) f.spareBlocks.push_back(std::move(block));
 }
 
 void Master::checkpoint(JobRuntime &j) {
@@ -390,6 +411,10 @@ void Master::closeFilm(JobRuntime &j) {
     f.chain.reset();
     f.pending.clear();
     f.heldBytes = 0;
+    {
+        const std::lock_guard<std::mutex> lock(f.spareMu);
+        f.spareBlocks.clear();
+    }
     fs::remove_all(fs::path(jobDir(j.record.id())) / "results", ec);
 }
 

@@ -222,33 +222,38 @@ void Store::saveJob(const Job &job) {
     setJobState(job.id(), job);
 }
 
-int64_t Store::leaseTask(int64_t job, const TaskSpec &task, bool isNew, const std::string &worker, int64_t nowMs) {
+std::vector<int64_t> Store::leaseTasks(int64_t job, const std::vector<TaskSpec> &tasks, const std::vector<bool> &isNew,
+                                       const std::string &worker, int64_t nowMs) {
     const std::lock_guard<std::mutex> lock(mu_);
     Transaction tx(db_);
-    if (isNew) {
-        TaskSpec work;
-        const char *kind = task.has_image()     ? "image"
-                           : task.has_seeding() ? "seeding"
-                           : task.has_chain()   ? "chain"
-                                                : "";
-        if (task.has_image()) *work.mutable_image() = task.image();
-        if (task.has_seeding()) *work.mutable_seeding() = task.seeding();
-        if (task.has_chain()) *work.mutable_chain() = task.chain();
-        if (!*kind) throw std::runtime_error("store: a task without work");
-        Stmt(db_, "INSERT INTO tasks (job_id, idx, kind, work, state) VALUES (?, ?, ?, ?, ?)")
-            .bind(job, task.task_index(), kind, serialize(work), task_state::kLeased)
+    std::vector<int64_t> attempts;
+    for (size_t i = 0; i < tasks.size(); ++i) {
+        const TaskSpec &task = tasks[i];
+        if (isNew[i]) {
+            TaskSpec work;
+            const char *kind = task.has_image()     ? "image"
+                               : task.has_seeding() ? "seeding"
+                               : task.has_chain()   ? "chain"
+                                                    : "";
+            if (task.has_image()) *work.mutable_image() = task.image();
+            if (task.has_seeding()) *work.mutable_seeding() = task.seeding();
+            if (task.has_chain()) *work.mutable_chain() = task.chain();
+            if (!*kind) throw std::runtime_error("store: a task without work");
+            Stmt(db_, "INSERT INTO tasks (job_id, idx, kind, work, state) VALUES (?, ?, ?, ?, ?)")
+                .bind(job, task.task_index(), kind, serialize(work), task_state::kLeased)
+                .run();
+        } else {
+            Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?")
+                .bind(task_state::kLeased, job, task.task_index())
+                .run();
+        }
+        Stmt(db_, "INSERT INTO attempts (job_id, task_idx, worker_id, state, leased_ms) VALUES (?, ?, ?, ?, ?)")
+            .bind(job, task.task_index(), worker, attempt_state::kLeased, nowMs)
             .run();
-    } else {
-        Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?")
-            .bind(task_state::kLeased, job, task.task_index())
-            .run();
+        attempts.push_back(sqlite3_last_insert_rowid(db_));
     }
-    Stmt(db_, "INSERT INTO attempts (job_id, task_idx, worker_id, state, leased_ms) VALUES (?, ?, ?, ?, ?)")
-        .bind(job, task.task_index(), worker, attempt_state::kLeased, nowMs)
-        .run();
-    const int64_t id = sqlite3_last_insert_rowid(db_);
     tx.commit();
-    return id;
+    return attempts;
 }
 
 void Store::endAttempt(int64_t attempt, const std::string &state, const std::string &error, int64_t nowMs) {

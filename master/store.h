@@ -71,8 +71,10 @@ public:
     int64_t createJob(Job &job);
     void saveJob(const Job &job);
 
-    // Leases a task: inserts the task row first if it is new, marks it leased and records the attempt.
-    int64_t leaseTask(int64_t job, const TaskSpec &task, bool isNew, const std::string &worker, int64_t nowMs);
+    // Leases tasks (several: a batch) in one transaction: inserts each task's row first if it is new
+    // (isNew[i]), marks it leased and records the attempt. Returns the attempts' ids, in order.
+    std::vector<int64_t> leaseTasks(int64_t job, const std::vector<TaskSpec> &tasks, const std::vector<bool> &isNew,
+                                    const std::string &worker, int64_t nowMs);
     // Ends an attempt without a result (failed, expired, cancelled); its task becomes pending again
     // unless the job is over.
     void endAttempt(int64_t attempt, const std::string &state, const std::string &error, int64_t nowMs);
