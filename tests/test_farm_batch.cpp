@@ -2,8 +2,8 @@
 // film blocks in task order and returns one result naming every attempt, so that the master decodes and
 // merges one film for all of them. Checked here: the image equals the embedded render up to the rounding of
 // the batch's own sum (it is added to the film as one block, not task by task), every task is merged exactly
-// once, a batch that is out of order, repeats an attempt, names another worker's attempt or comes again is
-// refused whole, and a worker that goes silent holding a batch, or a master restart with a batch waiting
+// once (also under a time budget), a batch that is out of order, repeats an attempt, names another worker's attempt or
+// comes again is refused whole, and a worker that goes silent holding a batch, or a master restart with a batch waiting
 // for its turn, loses no work.
 #include <gtest/gtest.h>
 
@@ -108,6 +108,21 @@ TEST_F(FarmTest, ABatchingWorkerRendersTheEmbeddedImageUpToRounding) {
     expectMergedOnce(*farm, job.id, kSpp / 8);
     // The worker batched: a batch's later tasks are stored without bytes of their own.
     EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0"), 0);
+}
+
+TEST_F(FarmTest, ATimeBudgetWithBatchesMergesEveryIssuedTaskOnce) {
+    farm->startMaster();
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 16, kSpp);
+    farm->startWorker(2, {"--batch", "4"});
+    const auto [code, output] = farm->cli("submit " + scene + " --time 1 --seed 2");
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    const v1::Job done = farm->waitForJob(id, 60s);
+    ASSERT_EQ(done.state(), v1::JOB_DONE);
+    EXPECT_GT(done.tasks().merged(), 1);
+    expectMergedOnce(*farm, id, done.tasks().merged());
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM tasks WHERE job_id = " + std::to_string(id)),
+              done.tasks().merged());
 }
 
 TEST_F(FarmTest, ABatchIsTakenWholeOnceOrRefused) {
