@@ -2,9 +2,9 @@
 // film blocks in task order and returns one result naming every attempt, so that the master decodes and
 // merges one film for all of them. Checked here: the image equals the embedded render up to the rounding of
 // the batch's own sum (it is added to the film as one block, not task by task), every task is merged exactly
-// once (also under a time budget), a batch that is out of order, repeats an attempt, names another worker's attempt or
-// comes again is refused whole, and a worker that goes silent holding a batch, or a master restart with a batch waiting
-// for its turn, loses no work.
+// once (also under a time budget), a batch that is out of order, repeats an attempt, names another worker's
+// attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master
+// restart with a batch waiting for its turn, loses no work.
 #include <gtest/gtest.h>
 
 #include <cmath>
