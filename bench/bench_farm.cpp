@@ -2,7 +2,9 @@
 // passes or fails on time.
 //
 //   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
-//   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res)
+//              [--fake-batch N[,N...]] [--task-seconds S]
+//   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res,
+//   batches of 1)
 //
 // 1. The same job rendered embedded (`pathfarm render --threads 2`) and by a farm of one local worker
 //    with 2 threads: samples/s of each and their ratio (farm time runs from the first lease to the
@@ -17,7 +19,10 @@
 //    sample count (rendered once per count, so the image is not the job's: this part measures cost,
 //    part 1 checks bits). Printed: the master's CPU per idle worker and second (no job), then under a
 //    saturating task rate its CPU per task, the tasks per second it sustains, the bytes per task on the
-//    wire, and the 8-core workers that implies (their task time from part 1).
+//    wire, and the 8-core workers that implies (their task time from part 1). With --fake-batch N the
+//    fake workers lease N tasks at once and return them as one result (pathfarm-worker --batch N); a
+//    list of sizes runs part 4 once per size, each with a fresh master. --task-seconds S: also the 8-core
+//    workers one master keeps busy at tasks of S seconds (e.g. part 1's smallest task, under --fake-only).
 #include <unistd.h>
 
 #include <atomic>
@@ -96,8 +101,8 @@ std::map<int64_t, std::string> resultsBySampleCount(const std::string &scene, in
 class FakeWorker {
 public:
     FakeWorker(const std::string &address, const std::string &token, const std::map<int64_t, std::string> &results,
-               int64_t pixels)
-        : token_(token), results_(results), pixels_(pixels) {
+               int64_t pixels, int batch)
+        : token_(token), results_(results), pixels_(pixels), batch_(batch) {
         grpc::ChannelArguments args;
         args.SetMaxReceiveMessageSize(64 << 20);
         args.SetMaxSendMessageSize(64 << 20);
@@ -121,12 +126,13 @@ public:
             v1::LeaseRequest req;
             req.set_worker_id(id_);
             req.set_wait_ms(2000);  // as pathfarm-worker long-polls
+            req.set_max_tasks(batch_);
             v1::LeaseReply reply;
             check(stub_->LeaseTask(context().get(), req, &reply), "LeaseTask");
             bytes_ += req.ByteSizeLong() + reply.ByteSizeLong();
             if (reply.has_task()) {
-                complete(reply.task());
-                ++tasks_;
+                complete(reply);
+                tasks_ += 1 + reply.more_size();
             } else if (done) {
                 return;
             }
@@ -144,8 +150,13 @@ public:
     uint64_t bytes() const { return bytes_; }
 
 private:
-    void complete(const v1::TaskSpec &task) {
+    // One result for the leased tasks (a batch: the first task's block stands for their sum, as the size
+    // of a compressed block hardly depends on its sample count).
+    void complete(const v1::LeaseReply &lease) {
+        const v1::TaskSpec &task = lease.task();
         const std::string &payload = results_.at(task.image().sample_count());
+        int64_t samples = task.image().sample_count();
+        for (const v1::TaskSpec &t : lease.more()) samples += t.image().sample_count();
         v1::CompleteReply reply;
         const auto ctx = context();
         auto writer = stub_->CompleteTask(ctx.get(), &reply);
@@ -153,7 +164,8 @@ private:
         v1::ResultHeader *h = header.mutable_header();
         h->set_worker_id(id_);
         h->set_attempt_id(task.attempt_id());
-        h->mutable_stats()->set_samples(static_cast<uint64_t>(task.image().sample_count() * pixels_));
+        for (const v1::TaskSpec &t : lease.more()) h->add_batch_attempt_ids(t.attempt_id());
+        h->mutable_stats()->set_samples(static_cast<uint64_t>(samples * pixels_));
         h->mutable_stats()->set_seconds(1e-3);
         h->set_payload_size(payload.size());
         h->set_payload_hash(farm::hashHex64(payload));
@@ -178,6 +190,7 @@ private:
     std::string token_;
     const std::map<int64_t, std::string> &results_;
     int64_t pixels_;
+    int batch_;
     std::unique_ptr<v1::WorkerService::Stub> stub_;
     std::string id_;
     std::chrono::milliseconds heartbeat_{3000};
@@ -185,18 +198,21 @@ private:
     uint64_t bytes_ = 0;
 };
 
-// Part 4: the master's cost per task under `workers` fake workers; with the time an 8-core worker takes
-// per pixel sample (0: unknown), the workers of 8 cores that one master keeps busy.
-void saturate(const std::string &scene, int res, int workers, int64_t tasks, double sampleSeconds8) {
+// Part 4: the master's cost per task under `workers` fake workers returning `batch` tasks per result;
+// with the time an 8-core worker takes per pixel sample (0: unknown), the workers of 8 cores that one
+// master keeps busy. `results` is filled on the first call (the rendering takes a while).
+void saturate(const std::string &scene, int res, int workers, int64_t tasks, double sampleSeconds8, int batch,
+              double taskSeconds, std::map<int64_t, std::string> &results) {
     test::farm::Farm farm("bench-saturate");
     const std::string copy = resizedCopy(scene, res, farm.dir() + "/scene");
     int64_t spp = 0;
     for (int64_t n = 0; n < tasks; ++n) spp += imageTaskSize(std::numeric_limits<int64_t>::max(), spp);
-    const auto results = resultsBySampleCount(copy, spp);
+    if (results.empty()) results = resultsBySampleCount(copy, spp);
     test::farm::Process &master = farm.startMaster({"--max-spp", std::to_string(spp)});
     std::vector<std::unique_ptr<FakeWorker>> fakes;
     for (int i = 0; i < workers; ++i)
-        fakes.push_back(std::make_unique<FakeWorker>(farm.address(), farm.workerToken(), results, int64_t(res) * res));
+        fakes.push_back(
+            std::make_unique<FakeWorker>(farm.address(), farm.workerToken(), results, int64_t(res) * res, batch));
     std::atomic<bool> done{false};
     std::vector<std::thread> threads;
     for (auto &f : fakes)
@@ -234,14 +250,17 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
     uint64_t bytes = 0;
     for (const auto &f : fakes) bytes += f->bytes();
     const double n = static_cast<double>(job.tasks().merged());
-    std::printf("saturation: %d fake workers, %lld tasks of %dx%d (%lld spp) in %.2f s\n", workers,
-                static_cast<long long>(job.tasks().merged()), res, res, static_cast<long long>(spp), wall);
+    std::printf("saturation: %d fake workers, batches of %d, %lld tasks of %dx%d (%lld spp) in %.2f s\n", workers,
+                batch, static_cast<long long>(job.tasks().merged()), res, res, static_cast<long long>(spp), wall);
     std::printf("  master CPU:                %8.3f ms per task\n", 1e3 * cpu / n);
     std::printf("  tasks per second:          %8.1f  (master CPU %.0f%% of one core; the machine may be shared)\n",
                 n / wall, 100 * cpu / wall);
     std::printf("  tasks per CPU-second:      %8.1f  (what one master core sustains)\n", n / cpu);
     std::printf("  bytes per task:            %8.0f  (protobuf messages both ways, heartbeats included)\n",
                 static_cast<double>(bytes) / n);
+    if (taskSeconds > 0)
+        std::printf("  8-core workers per master:  %7.0f at tasks of %.3f s; goal >= 500\n", taskSeconds / (cpu / n),
+                    taskSeconds);
     if (sampleSeconds8 <= 0) return;
     // This job's tasks are mostly of the largest size (render/image_task.h); a job as short as part 1's
     // has only small ones.
@@ -351,6 +370,8 @@ int main(int argc, char **argv) {
     std::string scene = std::string(PATHFARM_SOURCE_DIR) + "/scenes/cornell-box/scene.xml";
     int res = 256, spp = 64, fakeWorkers = 32, fakeRes = 0;  // 0: --res
     int64_t fakeTasks = 400;
+    std::vector<int> batches{1};
+    double taskSeconds = 0;
     bool fakeOnly = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -365,6 +386,12 @@ int main(int argc, char **argv) {
             fakeTasks = std::stoll(argv[++i]);
         } else if (a == "--fake-res" && value) {
             fakeRes = std::stoi(argv[++i]);
+        } else if (a == "--fake-batch" && value) {
+            batches.clear();
+            std::stringstream list(argv[++i]);
+            for (std::string n; std::getline(list, n, ',');) batches.push_back(std::stoi(n));
+        } else if (a == "--task-seconds" && value) {
+            taskSeconds = std::stod(argv[++i]);
         } else if (a == "--fake-only") {
             fakeOnly = true;
         } else if (a.rfind("--", 0) == 0) {
@@ -375,6 +402,9 @@ int main(int argc, char **argv) {
         }
     }
     const double sampleSeconds8 = fakeOnly ? 0 : realFarm(scene, res, spp);
-    saturate(scene, fakeRes > 0 ? fakeRes : res, fakeWorkers, fakeTasks, sampleSeconds8);
+    std::map<int64_t, std::string> results;
+    for (const int batch : batches)
+        saturate(scene, fakeRes > 0 ? fakeRes : res, fakeWorkers, fakeTasks, sampleSeconds8, batch, taskSeconds,
+                 results);
     return 0;
 }

@@ -219,6 +219,15 @@ void Master::recoverJob(const StoredJob &stored) {
     for (const std::string &w : store_.loadBlocklist(id)) j.blocklist.insert(w);
     for (const StoredResult &r : store_.loadUnmergedResults(id)) {
         const v1::TaskSpec &work = j.tasks.at(static_cast<size_t>(r.taskIndex)).work;
+        // The later tasks of a batched result share its file: they join their first task's entry.
+        if (const auto last = j.film.pending.rbegin(); last != j.film.pending.rend() && last->second.file == r.file &&
+                                                       last->first + last->second.tasks == r.taskIndex) {
+            v1::ImageTask &batch = *last->second.work.mutable_image();
+            batch.set_sample_count(batch.sample_count() + work.image().sample_count());
+            ++last->second.tasks;
+            ++j.taskCount;
+            continue;
+        }
         j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0};
         if (r.taskIndex >= j.chainFirst) {
             j.taskSeconds += r.stats.seconds();

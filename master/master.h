@@ -121,17 +121,23 @@ public:
 
     // ---- workers ----
     pathfarm::v1::RegisterReply registerWorker(const pathfarm::v1::RegisterRequest &req, const std::string &peer);
-    // A task for this worker, waiting up to `wait` for one; nullopt when there is none (or the worker
-    // drains). Throws UnknownWorker.
-    std::optional<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait);
+    // The most tasks one lease (and one batched result) holds.
+    static constexpr int kMaxBatchTasks = 64;
+    // A task for this worker, waiting up to `wait` for one; empty when there is none (or the worker
+    // drains). With maxTasks > 1, the image tasks that follow it in its job too (up to maxTasks, capped at
+    // kMaxBatchTasks, as many as can be leased now), for a batched result. Throws UnknownWorker.
+    std::vector<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait,
+                                              int maxTasks = 1);
     // Renews the worker's leases; returns the attempts it no longer holds. Throws UnknownWorker.
     std::vector<int64_t> heartbeat(const std::string &worker, const std::vector<int64_t> &attempts, bool draining);
     // Whether a result for `attempt` would be accepted now; "" if so, else the reason it is not.
     std::string checkAttempt(const std::string &worker, int64_t attempt) const;
     // Upper bound of a result payload for `attempt` (decoded size plus zstd's worst case).
     uint64_t maxPayloadBytes(int64_t attempt) const;
-    // Takes a result: validates and stores it, then merges every result that is next in task order.
-    pathfarm::v1::CompleteReply complete(const std::string &worker, int64_t attempt,
+    // Takes a result: validates and stores it, then merges every result that is next in task order. A
+    // batched result names several attempts: image tasks of one job that follow each other, in order
+    // (else farm::FarmError); it is taken whole or not at all, and merged once as one result.
+    pathfarm::v1::CompleteReply complete(const std::string &worker, const std::vector<int64_t> &attempts,
                                          const pathfarm::v1::TaskStats &stats, const std::string &payload);
     // Refuses a result that checkAttempt() found stale, recording late results of superseded attempts.
     pathfarm::v1::CompleteReply ignoreResult(const std::string &worker, int64_t attempt, const std::string &reason);
@@ -175,6 +181,10 @@ private:
     void expire(Clock::time_point now);
     // Under mu_.
     std::optional<pathfarm::v1::TaskSpec> pickTask(WorkerRuntime &w);
+    // Leases the job's tasks `indices` to the worker (a new attempt each, stored in one transaction).
+    // Throws StorageError (the tasks are then queued again).
+    std::vector<pathfarm::v1::TaskSpec> leaseIndices(JobRuntime &j, WorkerRuntime &w,
+                                                     const std::vector<int64_t> &indices);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
     bool mayIssue(JobRuntime &j);
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
@@ -191,8 +201,8 @@ private:
     // The memory a decoded result holds while it waits for its turn (0: not worth holding).
     static size_t heldBytes(const TaskOutput &output);
     void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
-    // The pending result of `task` is lost: the task goes back to the queue (takes mu_).
-    void discardResult(JobRuntime &j, int64_t task, const std::string &file);
+    // The pending result of tasks [task, task + count) is lost: they go back to the queue (takes mu_).
+    void discardResult(JobRuntime &j, int64_t task, int64_t count, const std::string &file);
     // Logs a failed write of the job's film files once per distinct fault.
     void storageFault(JobRuntime &j, const char *what, const std::exception &e);
     // Throws StorageError.
@@ -227,6 +237,10 @@ private:
     farm::BundleStore bundles_;
     Store store_;
     mutable std::mutex sceneLoadMu_;  // one scene load at a time bounds the master's memory
+    // Decompression buffers of decodeOutput, reused for the reason of JobFilm::spareBlocks.
+    mutable std::mutex scratchMu_;
+    mutable std::vector<std::vector<unsigned char>> scratch_;
+    static constexpr size_t kSpareScratch = 4;
 
     mutable std::mutex mu_;
     mutable std::condition_variable workChanged_;  // a task may have become available

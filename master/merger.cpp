@@ -40,10 +40,12 @@ uint64_t Master::maxPayloadBytes(int64_t attempt) const {
     return 0;
 }
 
-v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, const v1::TaskStats &stats,
-                                   const std::string &payload) {
-    if (const std::string reason = checkAttempt(worker, attempt); !reason.empty())
-        return ignoreResult(worker, attempt, reason);
+v1::CompleteReply Master::complete(const std::string &worker, const std::vector<int64_t> &attempts,
+                                   const v1::TaskStats &stats, const std::string &payload) {
+    for (const int64_t a : attempts)
+        if (const std::string reason = checkAttempt(worker, a); !reason.empty()) return ignoreResult(worker, a, reason);
+    const int64_t attempt = attempts.front();
+    const auto count = static_cast<int64_t>(attempts.size());
 
     JobRuntime *j = nullptr;
     int64_t task = 0;
@@ -56,6 +58,17 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
                 task = a->second;
                 work = j->tasks[static_cast<size_t>(task)].work;
             }
+        // A batch is merged as one image task of all its samples: its tasks must follow each other.
+        for (int64_t i = 1; i < count; ++i) {
+            const auto a = j->attemptTask.find(attempts[static_cast<size_t>(i)]);
+            if (j->chain || a == j->attemptTask.end() || a->second != task + i)
+                throw farm::FarmError(
+                    "CompleteTask: batched attempt " + std::to_string(attempts[static_cast<size_t>(i)]) +
+                    " is not image task " + std::to_string(task + i) + " of job " + std::to_string(j->record.id()) +
+                    " (a batch holds the tasks after attempt " + std::to_string(attempt) + "'s in order)");
+            const auto &next = j->tasks[static_cast<size_t>(a->second)].work.image();
+            work.mutable_image()->set_sample_count(work.image().sample_count() + next.sample_count());
+        }
     }
     const int64_t jobId = j->record.id();
     const auto t0 = Clock::now();
@@ -64,7 +77,7 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
         output.emplace(decodeOutput(*j, work, payload));
     } catch (const farm::FarmError &e) {
         const std::string why = std::string("corrupt result: ") + e.what();
-        fail(worker, attempt, why);
+        for (const int64_t a : attempts) fail(worker, a, why);
         throw farm::FarmError(why);
     }
     const double decodeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -73,49 +86,58 @@ v1::CompleteReply Master::complete(const std::string &worker, int64_t attempt, c
     // A full disk throws StorageError: the worker keeps its lease and retries the upload.
     writeFilmFile(file.string(), payload, false);
 
-    bool accepted = false;
+    bool accepted = true;
     {
         const std::lock_guard<std::mutex> lock(mu_);
-        // The lease may have expired or the job ended while the payload was on its way.
-        TaskRuntime &t = j->tasks[static_cast<size_t>(task)];
-        if (!isActive(j->record.state()) || t.attempt != attempt || t.state == TaskRuntime::State::Accepted ||
-            t.state == TaskRuntime::State::Merged) {
+        // The leases may have expired or the job ended while the payload was on its way.
+        for (int64_t i = 0; i < count; ++i) {
+            const TaskRuntime &t = j->tasks[static_cast<size_t>(task + i)];
+            accepted &= isActive(j->record.state()) && t.attempt == attempts[static_cast<size_t>(i)] &&
+                        t.state != TaskRuntime::State::Accepted && t.state != TaskRuntime::State::Merged;
+        }
+        if (!accepted) {
             fs::remove(file);
         } else {
             try {
-                store_.acceptResult(jobId, task, attempt, file.string(), payload.size(), stats, unixMs());
+                store_.acceptResult(jobId, task, attempts, file.string(), payload.size(), stats, unixMs());
             } catch (const StorageError &) {
                 std::error_code ec;
                 fs::remove(file, ec);
                 throw;
             }
-            t.state = TaskRuntime::State::Accepted;
-            accepted = true;
-            leases_.erase(attempt);
-            j->retry.erase(task);
+            for (int64_t i = 0; i < count; ++i) {
+                j->tasks[static_cast<size_t>(task + i)].state = TaskRuntime::State::Accepted;
+                leases_.erase(attempts[static_cast<size_t>(i)]);
+                j->retry.erase(task + i);
+            }
             if (task >= j->chainFirst) {
                 j->taskSeconds += stats.seconds();
-                ++j->taskCount;
+                j->taskCount += count;
             }
             if (const auto w = workers_.find(worker); w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
-                wr.attempts.erase(attempt);
-                wr.info.set_tasks_completed(wr.info.tasks_completed() + 1);
+                for (const int64_t a : attempts) wr.attempts.erase(a);
+                wr.info.set_tasks_completed(wr.info.tasks_completed() + count);
                 (work.has_chain() ? wr.mutationSeconds : wr.renderSeconds) += stats.seconds();
                 (work.has_chain() ? wr.mutations : wr.samples) += stats.samples();
             }
             counters_.resultBytes += payload.size();
             counters_.mergeSeconds += decodeSeconds;
-            spdlog::info("job={} task={} attempt={} worker={}: accepted, {} bytes, {:.3f} s on the worker", jobId, task,
-                         attempt, worker, payload.size(), stats.seconds());
+            spdlog::info("job={} task={} attempt={} worker={}: accepted{}, {} bytes, {:.3f} s on the worker", jobId,
+                         task, attempt, worker, count > 1 ? " with the next " + std::to_string(count - 1) : "",
+                         payload.size(), stats.seconds());
             touch();
         }
     }
-    if (!accepted) return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
+    if (!accepted) {
+        for (const int64_t a : attempts)
+            if (std::string reason = checkAttempt(worker, a); !reason.empty()) return ignoreResult(worker, a, reason);
+        return ignoreResult(worker, attempt, checkAttempt(worker, attempt));
+    }
     {
         const std::lock_guard<std::mutex> filmLock(j->film.mu);
         JobFilm &f = j->film;
-        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0};
+        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0, count};
         if (task == f.merged) {
             mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
         } else if (const size_t bytes = heldBytes(*output); bytes > 0 && f.heldBytes + bytes <= JobFilm::kHeldBytes) {
@@ -147,9 +169,27 @@ Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec 
     const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
     if (work.has_seeding()) return farm::decodeSeedingResult(payload, film, farm::fromProto(work.seeding()));
     if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
-    ImageBlock block = emptyBlock();
-    farm::decodeBlock(payload, block);
-    return block;
+    std::optional<ImageBlock> block;
+    {
+        const std::lock_guard<std::mutex> lock(j.film.spareMu);
+        if (!j.film.spareBlocks.empty()) {
+            block.emplace(std::move(j.film.spareBlocks.back()));
+            j.film.spareBlocks.pop_back();
+        }
+    }
+    if (!block) block.emplace(emptyBlock());
+    std::vector<unsigned char> scratch;
+    {
+        const std::lock_guard<std::mutex> lock(scratchMu_);
+        if (!scratch_.empty()) {
+            scratch = std::move(scratch_.back());
+            scratch_.pop_back();
+        }
+    }
+    farm::decodeBlock(payload, *block, scratch);
+    const std::lock_guard<std::mutex> lock(scratchMu_);
+    if (scratch_.size() < kSpareScratch) scratch_.push_back(std::move(scratch));
+    return std::move(*block);
 }
 
 size_t Master::heldBytes(const TaskOutput &output) {
@@ -187,7 +227,7 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
                 // The master's own file is unreadable, truncated or damaged; the task is reproducible.
                 spdlog::warn("job={} task={}: stored result lost ({}): rendering the task again", j.record.id(),
                              f.merged, e.what());
-                discardResult(j, f.merged, it->second.file);
+                discardResult(j, f.merged, it->second.tasks, it->second.file);
                 f.pending.erase(it);
                 continue;
             }
@@ -201,8 +241,8 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
         rays += it->second.stats.rays();
         loadSeconds += it->second.stats.scene_load_seconds();
         if (!work.has_seeding()) f.mergedSinceCheckpoint.push_back(it->second.file);
+        f.merged += it->second.tasks;
         f.pending.erase(it);
-        ++f.merged;
     }
     if (f.merged == before) return;
     if (f.chain) seedingSamples += f.chain->job->chains().seedSamples - burstSeedsBefore;
@@ -244,13 +284,15 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     }
 }
 
-void Master::discardResult(JobRuntime &j, int64_t task, const std::string &file) {
+void Master::discardResult(JobRuntime &j, int64_t task, int64_t count, const std::string &file) {
     const std::lock_guard<std::mutex> lock(mu_);
-    store_.discardResult(j.record.id(), task);
     std::error_code ec;
     fs::remove(file, ec);
-    j.tasks[static_cast<size_t>(task)].state = TaskRuntime::State::Pending;
-    j.retry.insert(task);
+    for (int64_t t = task; t < task + count; ++t) {
+        store_.discardResult(j.record.id(), t);
+        j.tasks[static_cast<size_t>(t)].state = TaskRuntime::State::Pending;
+        j.retry.insert(t);
+    }
     ++counters_.resultsLost;
     touch();
     workChanged_.notify_all();
@@ -270,8 +312,11 @@ void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput out
         mergeChainOutput(f, work, std::move(output));
         return;
     }
-    f.block->merge(std::get<ImageBlock>(output));
+    ImageBlock &block = std::get<ImageBlock>(output);
+    f.block->merge(block);
     f.spp += work.image().sample_count();
+    const std::lock_guard<std::mutex> lock(f.spareMu);
+    if (f.spareBlocks.size() < JobFilm::kSpareBlocks) f.spareBlocks.push_back(std::move(block));
 }
 
 void Master::checkpoint(JobRuntime &j) {
@@ -366,6 +411,10 @@ void Master::closeFilm(JobRuntime &j) {
     f.chain.reset();
     f.pending.clear();
     f.heldBytes = 0;
+    {
+        const std::lock_guard<std::mutex> lock(f.spareMu);
+        f.spareBlocks.clear();
+    }
     fs::remove_all(fs::path(jobDir(j.record.id())) / "results", ec);
 }
 

@@ -78,8 +78,16 @@ struct Master::JobFilm {
         // (with many workers most results arrive out of order). Without it the file is read.
         std::optional<TaskOutput> output;
         size_t bytes = 0;
+        // A batched result holds tasks [index, index + tasks), and `work` their samples together.
+        int64_t tasks = 1;
     };
     std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
+    // Decoded image results' blocks, reused once merged (decodeBlock overwrites every value): allocating
+    // and clearing a film of doubles per result cost the master as much as decoding it (perf under
+    // bench_farm). Under spareMu alone; decodeOutput takes them without the film mutex.
+    static constexpr size_t kSpareBlocks = 2;
+    mutable std::mutex spareMu;
+    mutable std::vector<ImageBlock> spareBlocks;
     static constexpr size_t kHeldBytes = size_t{128} << 20;
     size_t heldBytes = 0;  // of the pending outputs held in memory
     // Their result files, deleted once checkpointed (a chain job's seeding results are kept: they are

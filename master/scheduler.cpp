@@ -64,7 +64,7 @@ v1::RegisterReply Master::registerWorker(const v1::RegisterRequest &req, const s
     return reply;
 }
 
-std::optional<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::milliseconds wait) {
+std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::milliseconds wait, int maxTasks) {
     const auto until = Clock::now() + std::min<std::chrono::milliseconds>(wait, std::chrono::seconds(30));
     std::unique_lock<std::mutex> lock(mu_);
     for (;;) {
@@ -74,9 +74,33 @@ std::optional<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono
         w.lastSeen = Clock::now();
         w.info.set_last_seen_unix_ms(unixMs());
         if (w.info.state() == v1::WORKER_LOST) w.info.set_state(v1::WORKER_IDLE);
-        if (w.draining || stopping_) return std::nullopt;
-        if (auto task = pickTask(w)) return task;
-        if (workChanged_.wait_until(lock, until) == std::cv_status::timeout) return std::nullopt;
+        if (w.draining || stopping_) return {};
+        if (auto task = pickTask(w)) {
+            std::vector<v1::TaskSpec> tasks{std::move(*task)};
+            // A batch (merged by the worker, so that the master decodes and merges it once) holds image
+            // tasks in a row: the master merges in task order, and a chain job's tasks merge by kind.
+            JobRuntime &j = *jobs_.at(tasks.front().job_id());
+            const auto most = static_cast<size_t>(std::clamp(maxTasks, 1, kMaxBatchTasks));
+            std::vector<int64_t> following;
+            for (int64_t want = tasks.front().task_index() + 1; !j.chain && 1 + following.size() < most; ++want) {
+                const std::optional<int64_t> next = nextTaskFor(j, w);
+                if (!next) break;
+                if (*next != want) {
+                    j.retry.insert(*next);  // issued but not in the batch's row: the next request takes it
+                    break;
+                }
+                following.push_back(want);
+            }
+            if (!following.empty()) {
+                try {
+                    for (v1::TaskSpec &t : leaseIndices(j, w, following)) tasks.push_back(std::move(t));
+                } catch (const StorageError &) {
+                    // The first task's lease stands; the others went back to the queue.
+                }
+            }
+            return tasks;
+        }
+        if (workChanged_.wait_until(lock, until) == std::cv_status::timeout) return {};
     }
 }
 
@@ -94,38 +118,50 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
         if (!algs.empty() && std::find(algs.begin(), algs.end(), j.record.integrator()) == algs.end()) continue;
         const std::optional<int64_t> index = nextTaskFor(j, w);
         if (!index) continue;
-        TaskRuntime &t = j.tasks[static_cast<size_t>(*index)];
-        const bool isNew = t.attempt == 0 && t.failures == 0;
-        v1::TaskSpec spec = t.work;
+        return std::move(leaseIndices(j, w, {*index}).front());
+    }
+    return std::nullopt;
+}
+
+std::vector<v1::TaskSpec> Master::leaseIndices(JobRuntime &j, WorkerRuntime &w, const std::vector<int64_t> &indices) {
+    std::vector<v1::TaskSpec> specs;
+    std::vector<bool> isNew;
+    for (const int64_t index : indices) {
+        const TaskRuntime &t = j.tasks[static_cast<size_t>(index)];
+        isNew.push_back(t.attempt == 0 && t.failures == 0);
+        v1::TaskSpec &spec = specs.emplace_back(t.work);
         spec.set_job_id(j.record.id());
         *spec.mutable_job() = j.record.spec();
         spec.set_scene_file(j.record.scene_file());
-        const int64_t now = unixMs();
-        int64_t attempt = 0;
-        try {
-            attempt = store_.leaseTask(j.record.id(), spec, isNew, w.info.id(), now);
-        } catch (const StorageError &) {
-            j.retry.insert(*index);  // not leased: the next request takes it again
-            throw;
-        }
-        spec.set_attempt_id(attempt);
+    }
+    const int64_t now = unixMs();
+    std::vector<int64_t> attempts;
+    try {
+        attempts = store_.leaseTasks(j.record.id(), specs, isNew, w.info.id(), now);
+    } catch (const StorageError &) {
+        j.retry.insert(indices.begin(), indices.end());  // not leased: the next request takes them again
+        throw;
+    }
+    for (size_t i = 0; i < indices.size(); ++i) {
+        const int64_t index = indices[i], attempt = attempts[i];
+        specs[i].set_attempt_id(attempt);
+        TaskRuntime &t = j.tasks[static_cast<size_t>(index)];
         t.state = TaskRuntime::State::Leased;
         t.attempt = attempt;
-        j.attemptTask[attempt] = *index;
+        j.attemptTask[attempt] = index;
         j.attemptWorker[attempt] = w.info.id();
-        leases_[attempt] = {j.record.id(), *index, w.info.id(), Clock::now() + cfg_.leaseTime};
+        leases_[attempt] = {j.record.id(), index, w.info.id(), Clock::now() + cfg_.leaseTime};
         w.attempts.insert(attempt);
-        if (j.record.state() == v1::JOB_QUEUED) {
-            j.record.set_state(v1::JOB_RUNNING);
-            j.record.set_started_unix_ms(now);
-            store_.saveJob(snapshot(j));
-        }
-        spdlog::info("job={} task={} attempt={} worker={}: leased, {}", j.record.id(), *index, attempt, w.info.id(),
-                     farm::describeWork(spec));
-        touch();
-        return spec;
+        spdlog::info("job={} task={} attempt={} worker={}: leased, {}", j.record.id(), index, attempt, w.info.id(),
+                     farm::describeWork(specs[i]));
     }
-    return std::nullopt;
+    if (j.record.state() == v1::JOB_QUEUED) {
+        j.record.set_state(v1::JOB_RUNNING);
+        j.record.set_started_unix_ms(now);
+        store_.saveJob(snapshot(j));
+    }
+    touch();
+    return specs;
 }
 
 std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w) {

@@ -178,9 +178,10 @@ Status WorkerService::Register(grpc::ServerContext *ctx, const v1::RegisterReque
 Status WorkerService::LeaseTask(grpc::ServerContext *ctx, const v1::LeaseRequest *req, v1::LeaseReply *reply) {
     return handle(ctx, token_, "LeaseTask", [&] {
         spdlog::debug("worker={}: LeaseTask", req->worker_id());
-        if (auto task =
-                master_.lease(req->worker_id(), std::chrono::milliseconds(std::max<int64_t>(0, req->wait_ms()))))
-            *reply->mutable_task() = std::move(*task);
+        std::vector<v1::TaskSpec> tasks = master_.lease(
+            req->worker_id(), std::chrono::milliseconds(std::max<int64_t>(0, req->wait_ms())), req->max_tasks());
+        for (size_t i = 0; i < tasks.size(); ++i)
+            *(i == 0 ? reply->mutable_task() : reply->add_more()) = std::move(tasks[i]);
         return Status::OK;
     });
 }
@@ -212,13 +213,19 @@ Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<
         const v1::ResultHeader header = farm::readResultHeader(read);
         spdlog::debug("attempt={} worker={}: CompleteTask, {} bytes", header.attempt_id(), header.worker_id(),
                       header.payload_size());
+        if (header.batch_attempt_ids_size() >= Master::kMaxBatchTasks)
+            throw farm::FarmError("CompleteTask: a batch of more than " + std::to_string(Master::kMaxBatchTasks) +
+                                  " tasks");
+        std::vector<int64_t> attempts{header.attempt_id()};
+        attempts.insert(attempts.end(), header.batch_attempt_ids().begin(), header.batch_attempt_ids().end());
         // A stale result is refused before its payload is read.
-        if (const std::string reason = master_.checkAttempt(header.worker_id(), header.attempt_id()); !reason.empty()) {
-            *reply = master_.ignoreResult(header.worker_id(), header.attempt_id(), reason);
-            return Status::OK;
-        }
+        for (const int64_t a : attempts)
+            if (const std::string reason = master_.checkAttempt(header.worker_id(), a); !reason.empty()) {
+                *reply = master_.ignoreResult(header.worker_id(), a, reason);
+                return Status::OK;
+            }
         const std::string payload = farm::readResultPayload(header, master_.maxPayloadBytes(header.attempt_id()), read);
-        *reply = master_.complete(header.worker_id(), header.attempt_id(), header.stats(), payload);
+        *reply = master_.complete(header.worker_id(), attempts, header.stats(), payload);
         return Status::OK;
     });
 }

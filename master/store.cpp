@@ -222,33 +222,38 @@ void Store::saveJob(const Job &job) {
     setJobState(job.id(), job);
 }
 
-int64_t Store::leaseTask(int64_t job, const TaskSpec &task, bool isNew, const std::string &worker, int64_t nowMs) {
+std::vector<int64_t> Store::leaseTasks(int64_t job, const std::vector<TaskSpec> &tasks, const std::vector<bool> &isNew,
+                                       const std::string &worker, int64_t nowMs) {
     const std::lock_guard<std::mutex> lock(mu_);
     Transaction tx(db_);
-    if (isNew) {
-        TaskSpec work;
-        const char *kind = task.has_image()     ? "image"
-                           : task.has_seeding() ? "seeding"
-                           : task.has_chain()   ? "chain"
-                                                : "";
-        if (task.has_image()) *work.mutable_image() = task.image();
-        if (task.has_seeding()) *work.mutable_seeding() = task.seeding();
-        if (task.has_chain()) *work.mutable_chain() = task.chain();
-        if (!*kind) throw std::runtime_error("store: a task without work");
-        Stmt(db_, "INSERT INTO tasks (job_id, idx, kind, work, state) VALUES (?, ?, ?, ?, ?)")
-            .bind(job, task.task_index(), kind, serialize(work), task_state::kLeased)
+    std::vector<int64_t> attempts;
+    for (size_t i = 0; i < tasks.size(); ++i) {
+        const TaskSpec &task = tasks[i];
+        if (isNew[i]) {
+            TaskSpec work;
+            const char *kind = task.has_image()     ? "image"
+                               : task.has_seeding() ? "seeding"
+                               : task.has_chain()   ? "chain"
+                                                    : "";
+            if (task.has_image()) *work.mutable_image() = task.image();
+            if (task.has_seeding()) *work.mutable_seeding() = task.seeding();
+            if (task.has_chain()) *work.mutable_chain() = task.chain();
+            if (!*kind) throw std::runtime_error("store: a task without work");
+            Stmt(db_, "INSERT INTO tasks (job_id, idx, kind, work, state) VALUES (?, ?, ?, ?, ?)")
+                .bind(job, task.task_index(), kind, serialize(work), task_state::kLeased)
+                .run();
+        } else {
+            Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?")
+                .bind(task_state::kLeased, job, task.task_index())
+                .run();
+        }
+        Stmt(db_, "INSERT INTO attempts (job_id, task_idx, worker_id, state, leased_ms) VALUES (?, ?, ?, ?, ?)")
+            .bind(job, task.task_index(), worker, attempt_state::kLeased, nowMs)
             .run();
-    } else {
-        Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?")
-            .bind(task_state::kLeased, job, task.task_index())
-            .run();
+        attempts.push_back(sqlite3_last_insert_rowid(db_));
     }
-    Stmt(db_, "INSERT INTO attempts (job_id, task_idx, worker_id, state, leased_ms) VALUES (?, ?, ?, ?, ?)")
-        .bind(job, task.task_index(), worker, attempt_state::kLeased, nowMs)
-        .run();
-    const int64_t id = sqlite3_last_insert_rowid(db_);
     tx.commit();
-    return id;
+    return attempts;
 }
 
 void Store::endAttempt(int64_t attempt, const std::string &state, const std::string &error, int64_t nowMs) {
@@ -281,19 +286,22 @@ void Store::ignoreAttempt(int64_t attempt, int64_t nowMs) {
         .run();
 }
 
-void Store::acceptResult(int64_t job, int64_t task, int64_t attempt, const std::string &file, uint64_t bytes,
-                         const TaskStats &stats, int64_t nowMs) {
+void Store::acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &attempts, const std::string &file,
+                         uint64_t bytes, const TaskStats &stats, int64_t nowMs) {
     const std::lock_guard<std::mutex> lock(mu_);
     Transaction tx(db_);
-    Stmt(db_, "UPDATE attempts SET state = ?, finished_ms = ? WHERE id = ?")
-        .bind(attempt_state::kCompleted, nowMs, attempt)
-        .run();
-    Stmt(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?").bind(task_state::kAccepted, job, task).run();
-    Stmt(db_,
-         "INSERT INTO results (job_id, task_idx, attempt_id, file, bytes, stats, accepted_ms) VALUES (?, ?, ?, ?, ?, "
-         "?, ?)")
-        .bind(job, task, attempt, file, bytes, serialize(stats), nowMs)
-        .run();
+    Stmt attempt(db_, "UPDATE attempts SET state = ?, finished_ms = ? WHERE id = ?");
+    Stmt accept(db_, "UPDATE tasks SET state = ? WHERE job_id = ? AND idx = ?");
+    Stmt insert(db_,
+                "INSERT INTO results (job_id, task_idx, attempt_id, file, bytes, stats, accepted_ms) VALUES (?, ?, ?, "
+                "?, ?, ?, ?)");
+    for (size_t i = 0; i < attempts.size(); ++i) {
+        const int64_t t = task + static_cast<int64_t>(i);
+        attempt.bind(attempt_state::kCompleted, nowMs, attempts[i]).run();
+        accept.bind(task_state::kAccepted, job, t).run();
+        insert.bind(job, t, attempts[i], file, i == 0 ? bytes : 0, serialize(i == 0 ? stats : TaskStats()), nowMs)
+            .run();
+    }
     tx.commit();
 }
 

@@ -71,8 +71,10 @@ public:
     int64_t createJob(Job &job);
     void saveJob(const Job &job);
 
-    // Leases a task: inserts the task row first if it is new, marks it leased and records the attempt.
-    int64_t leaseTask(int64_t job, const TaskSpec &task, bool isNew, const std::string &worker, int64_t nowMs);
+    // Leases tasks (several: a batch) in one transaction: inserts each task's row first if it is new
+    // (isNew[i]), marks it leased and records the attempt. Returns the attempts' ids, in order.
+    std::vector<int64_t> leaseTasks(int64_t job, const std::vector<TaskSpec> &tasks, const std::vector<bool> &isNew,
+                                    const std::string &worker, int64_t nowMs);
     // Ends an attempt without a result (failed, expired, cancelled); its task becomes pending again
     // unless the job is over.
     void endAttempt(int64_t attempt, const std::string &state, const std::string &error, int64_t nowMs);
@@ -80,9 +82,11 @@ public:
     void cancelAttempts(int64_t job, int64_t nowMs);
     // Records that a late result of a superseded attempt was refused.
     void ignoreAttempt(int64_t attempt, int64_t nowMs);
-    // The result of `attempt` is stored in `file`: attempt completed, task accepted, result recorded.
-    void acceptResult(int64_t job, int64_t task, int64_t attempt, const std::string &file, uint64_t bytes,
-                      const TaskStats &stats, int64_t nowMs);
+    // The result of `attempts` (of tasks task, task + 1, ...: a batch holds several) is stored in `file`:
+    // attempts completed, tasks accepted, results recorded, in one transaction. The batch's later tasks
+    // are recorded with the same file, no bytes and empty stats, so that sums over results stay right.
+    void acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &attempts, const std::string &file,
+                      uint64_t bytes, const TaskStats &stats, int64_t nowMs);
     // The film checkpoint `file` contains tasks [0, mergedTasks): tasks [fromTask, mergedTasks) are
     // recorded as merged, and the job's record saved, in one transaction.
     void commitCheckpoint(const Job &job, int64_t fromTask, int64_t mergedTasks, const std::string &file,

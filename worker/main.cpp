@@ -37,6 +37,10 @@ int main(int argc, char **argv) {
     app.add_option("--health-listen", healthListen, "Address of this worker's gRPC health service (port 0: any)")
         ->capture_default_str();
     app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+    app.add_option("--batch", cfg.batch,
+                   "Image tasks leased at once and returned as one result (less master CPU per task; "
+                   "default 1, the only size whose image equals the embedded render bit for bit)")
+        ->check(CLI::Range(1, 64));
     app.add_flag("--fail-every-task", cfg.failEveryTask, "Test-only fault injection: fail every leased task")
         ->group("");
     try {

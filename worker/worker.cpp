@@ -145,17 +145,21 @@ int Worker::run() {
                 return static_cast<int>(queued_.size()) + running_ < cfg_.threads || draining_ || stopping_;
             });
         }
-        const auto task = leaseTask();
-        if (!task) continue;
-        hold(task->attempt_id());
+        const std::vector<v1::TaskSpec> tasks = leaseTasks();
+        if (tasks.empty()) continue;
+        for (const v1::TaskSpec &t : tasks) hold(t.attempt_id());
         std::unique_lock<std::mutex> lock(mu_);
-        if (task->has_image()) {
+        if (tasks.front().has_image()) {
             // An image task renders on every thread: it waits for the single-threaded tasks in hand.
             changed_.wait(lock, idle);
             lock.unlock();
-            work(*task, cfg_.threads);
+            if (tasks.size() == 1) {
+                work(tasks.front(), cfg_.threads);
+            } else {
+                workBatch(tasks, cfg_.threads);
+            }
         } else {
-            queued_.push_back(*task);
+            queued_.push_back(tasks.front());
             changed_.notify_all();
         }
     }
@@ -182,11 +186,12 @@ int Worker::run() {
     return 0;
 }
 
-std::optional<v1::TaskSpec> Worker::leaseTask() {
+std::vector<v1::TaskSpec> Worker::leaseTasks() {
     for (int step = 0; !draining_;) {
         v1::LeaseRequest req;
         req.set_worker_id(workerId());
         req.set_wait_ms(2000);
+        req.set_max_tasks(cfg_.batch);
         v1::LeaseReply reply;
         const auto ctx = context(std::chrono::seconds(30));
         {
@@ -200,18 +205,23 @@ std::optional<v1::TaskSpec> Worker::leaseTask() {
             leaseCall_ = nullptr;
         }
         if (!retryable(s)) heardFromMaster();
-        if (s.ok()) return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
-        if (draining_) return std::nullopt;
+        if (s.ok()) {
+            std::vector<v1::TaskSpec> tasks;
+            if (reply.has_task()) tasks.push_back(std::move(*reply.mutable_task()));
+            for (v1::TaskSpec &t : *reply.mutable_more()) tasks.push_back(std::move(t));
+            return tasks;
+        }
+        if (draining_) return {};
         if (s.error_code() == grpc::StatusCode::NOT_FOUND) {
             registerWithMaster();  // the master forgot this worker (a new store)
         } else if (!retryable(s)) {
             throw std::runtime_error("lease refused: " + s.error_message());
         } else {
             spdlog::warn("worker={}: master unavailable ({}); retrying", workerId(), s.error_message());
-            if (!backoff(step)) return std::nullopt;
+            if (!backoff(step)) return {};
         }
     }
-    return std::nullopt;
+    return {};
 }
 
 void Worker::runnerLoop() {
@@ -230,14 +240,33 @@ void Worker::runnerLoop() {
     }
 }
 
+bool Worker::mayRender(const v1::TaskSpec &task) {
+    spdlog::info("job={} task={} attempt={} worker={}: rendering {}", task.job_id(), task.task_index(),
+                 task.attempt_id(), workerId(), farm::describeWork(task));
+    if (!cfg_.failEveryTask) return true;
+    failTask(task.attempt_id(), "injected fault (--fail-every-task)");
+    return false;
+}
+
+bool Worker::keepResult(const v1::TaskSpec &task) {
+    if (!isLost(task.attempt_id())) return true;
+    spdlog::warn("job={} task={} attempt={}: lease lost while rendering; result dropped", task.job_id(),
+                 task.task_index(), task.attempt_id());
+    release(task.attempt_id());
+    return false;
+}
+
+void Worker::queueUpload(Result result) {
+    // Results wait while earlier ones upload; rendering the next tasks overlaps the uploads.
+    std::unique_lock<std::mutex> lock(mu_);
+    changed_.wait(lock, [&] { return static_cast<int>(uploads_.size()) < cfg_.threads || stopping_; });
+    uploads_.push_back(std::move(result));
+    changed_.notify_all();
+}
+
 void Worker::work(const v1::TaskSpec &task, int threads) {
     const int64_t attempt = task.attempt_id();
-    spdlog::info("job={} task={} attempt={} worker={}: rendering {}", task.job_id(), task.task_index(), attempt,
-                 workerId(), farm::describeWork(task));
-    if (cfg_.failEveryTask) {
-        failTask(attempt, "injected fault (--fail-every-task)");
-        return;
-    }
+    if (!mayRender(task)) return;
     std::optional<Result> result;
     try {
         const auto t0 = std::chrono::steady_clock::now();
@@ -249,17 +278,67 @@ void Worker::work(const v1::TaskSpec &task, int threads) {
         failTask(attempt, e.what());
         return;
     }
-    if (isLost(attempt)) {
-        spdlog::warn("job={} task={} attempt={}: lease lost while rendering; result dropped", task.job_id(),
-                     task.task_index(), attempt);
-        release(attempt);
-        return;
+    if (keepResult(task)) queueUpload(std::move(*result));
+}
+
+void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
+    // The tasks follow each other in their job; their blocks are summed in task order, as the master
+    // would merge them. A task that fails or whose lease is lost ends the run before it.
+    std::optional<ImageBlock> sum;
+    Result run{};
+    const auto flush = [&] {
+        if (!sum) return;
+        run.payload = farm::encodeBlock(*sum);
+        queueUpload(std::move(run));
+        sum.reset();
+    };
+    for (const v1::TaskSpec &task : tasks) {
+        if (!mayRender(task)) {
+            flush();
+            continue;
+        }
+        std::optional<ImageTaskResult> image;
+        double loadSeconds = 0;
+        try {
+            const auto t0 = std::chrono::steady_clock::now();
+            const std::shared_ptr<const Prepared> p = prepare(task);
+            loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            image.emplace(renderImage(*p, task, threads));
+        } catch (const std::exception &e) {
+            failTask(task.attempt_id(), e.what());
+            flush();
+            continue;
+        }
+        if (!keepResult(task)) {
+            flush();
+            continue;
+        }
+        if (sum) {
+            sum->merge(image->block);
+            run.batch.push_back(task.attempt_id());
+            run.samples += image->samples;
+            run.rays += image->rays;
+            run.seconds += image->seconds;
+            run.loadSeconds += loadSeconds;
+        } else {
+            sum.emplace(std::move(image->block));
+            run = Result{task.attempt_id(), {}, {}, image->samples, image->rays, image->seconds, loadSeconds};
+        }
     }
-    // Results wait while earlier ones upload; rendering the next tasks overlaps the uploads.
-    std::unique_lock<std::mutex> lock(mu_);
-    changed_.wait(lock, [&] { return static_cast<int>(uploads_.size()) < cfg_.threads || stopping_; });
-    uploads_.push_back(std::move(*result));
-    changed_.notify_all();
+    flush();
+}
+
+ImageTaskResult Worker::renderImage(const Prepared &p, const v1::TaskSpec &task, int threads) const {
+    // A chain job's direct component renders with its own integrator and seed (render/chain_job.h).
+    const bool direct = task.image().direct();
+    const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
+    if (direct && !chain) throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no direct tasks");
+    const auto *integrator =
+        direct ? chain->directIntegrator() : dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
+    if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
+    const uint64_t seed = task.job().seed();
+    return runImageTask(*p.scene, *integrator, direct ? directComponentSeed(seed) : seed,
+                        ImageTask{task.image().first_sample(), task.image().sample_count()}, threads);
 }
 
 Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int threads) const {
@@ -267,7 +346,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
     const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
     if ((task.has_seeding() || task.has_chain() || task.image().direct()) && !chain)
         throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no seeding or chain tasks");
-    Result r{task.attempt_id(), {}, 0, 0, 0, 0};
+    Result r{task.attempt_id(), {}, {}, 0, 0, 0, 0};
     if (task.has_seeding()) {
         // The job's spp budget, as the master's ChainJob saw it (0: a time budget or the scene's sampleCount).
         const int64_t spp = task.job().budget().kind_case() == v1::Budget::kSpp ? task.job().budget().spp() : 0;
@@ -279,14 +358,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
         r.payload = farm::encodeChainResult(c);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(c.mutations, c.rays, c.seconds);
     } else if (task.has_image()) {
-        // A chain job's direct component renders with its own integrator and seed (render/chain_job.h).
-        const bool direct = task.image().direct();
-        const auto *integrator =
-            direct ? chain->directIntegrator() : dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
-        if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
-        const ImageTaskResult i =
-            runImageTask(*p.scene, *integrator, direct ? directComponentSeed(seed) : seed,
-                         ImageTask{task.image().first_sample(), task.image().sample_count()}, threads);
+        const ImageTaskResult i = renderImage(p, task, threads);
         r.payload = farm::encodeBlock(i.block);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(i.samples, i.rays, i.seconds);
     } else {
@@ -365,7 +437,10 @@ bool Worker::upload(const Result &r) {
     const std::string &payload = r.payload;
     const std::string hash = farm::hashHex64(payload);
     const size_t chunk = static_cast<size_t>(std::max(4096, cfg_.maxMessageBytes - 4096));
-    for (int step = 0; !isLost(r.attempt);) {
+    const auto lost = [&] {
+        return isLost(r.attempt) || std::any_of(r.batch.begin(), r.batch.end(), [&](int64_t a) { return isLost(a); });
+    };
+    for (int step = 0; !lost();) {
         v1::CompleteReply reply;
         const auto ctx = context(std::chrono::minutes(10));
         {
@@ -377,6 +452,7 @@ bool Worker::upload(const Result &r) {
         auto *h = c.mutable_header();
         h->set_worker_id(workerId());
         h->set_attempt_id(r.attempt);
+        for (const int64_t a : r.batch) h->add_batch_attempt_ids(a);
         h->mutable_stats()->set_samples(r.samples);
         h->mutable_stats()->set_rays(r.rays);
         h->mutable_stats()->set_seconds(r.seconds);
@@ -435,6 +511,7 @@ void Worker::uploadLoop() {
         lock.unlock();
         const bool delivered = upload(r);
         release(r.attempt);
+        for (const int64_t a : r.batch) release(a);
         lock.lock();
         abandoned_ += !delivered;
         uploading_ = false;

@@ -33,6 +33,10 @@ struct WorkerConfig {
     std::string name;
     std::string cacheDir = "pathfarm-cache";
     int threads = 1;
+    // Image tasks leased at once and returned as one result (merged here in task order), so that the
+    // master decodes and merges one film for all of them. 1: a result per task, whose merge on the master
+    // reproduces the embedded render bit for bit; a batch's sum rounds differently (in the last bits).
+    int batch = 1;
     int maxMessageBytes = 4 << 20;  // until the master says otherwise
     // Test-only fault injection: report every leased task as failed without rendering it.
     bool failEveryTask = false;
@@ -54,7 +58,8 @@ public:
 private:
     struct Result {
         int64_t attempt;
-        std::string payload;  // by task kind (see TaskSpec in common.proto)
+        std::vector<int64_t> batch;  // the attempts of the tasks after `attempt`'s that the payload holds
+        std::string payload;         // by task kind (see TaskSpec in common.proto)
         uint64_t samples, rays;
         double seconds;
         double loadSeconds;  // preparing the scene for this task
@@ -66,9 +71,19 @@ private:
     };
 
     void registerWithMaster();
-    std::optional<pathfarm::v1::TaskSpec> leaseTask();
+    // A task, and with --batch the image tasks after it (empty: none now).
+    std::vector<pathfarm::v1::TaskSpec> leaseTasks();
     // Runs a task (held already) on `threads` threads and queues its result for upload.
     void work(const pathfarm::v1::TaskSpec &task, int threads);
+    // Runs a batch of image tasks (held already) one after another on `threads` threads, and queues each
+    // run of them that follow each other (all, unless one failed or was lost) as one result.
+    void workBatch(const std::vector<pathfarm::v1::TaskSpec> &tasks, int threads);
+    // Logs the task; false (and the attempt reported or released) when it must not be rendered or its
+    // result not be delivered: fault injection before, a lost lease after rendering.
+    bool mayRender(const pathfarm::v1::TaskSpec &task);
+    bool keepResult(const pathfarm::v1::TaskSpec &task);
+    ImageTaskResult renderImage(const Prepared &p, const pathfarm::v1::TaskSpec &task, int threads) const;
+    void queueUpload(Result result);
     Result runTask(const Prepared &p, const pathfarm::v1::TaskSpec &task, int threads) const;
     // Runs the queued single-threaded tasks (seeding, chains), one at a time.
     void runnerLoop();

@@ -111,6 +111,11 @@ std::string encodeBlock(const ImageBlock &block, int zstdLevel) {
 }
 
 void decodeBlock(std::string_view data, ImageBlock &block) {
+    std::vector<unsigned char> scratch;
+    decodeBlock(data, block, scratch);
+}
+
+void decodeBlock(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch) {
     Header h;
     if (data.size() < sizeof h) throw FarmError("film block: truncated header");
     std::memcpy(&h, data.data(), sizeof h);
@@ -128,14 +133,15 @@ void decodeBlock(std::string_view data, ImageBlock &block) {
     const std::string_view compressed = data.substr(sizeof h);
     const unsigned long long content = ZSTD_getFrameContentSize(compressed.data(), compressed.size());
     if (content != values * sizeof(double)) throw FarmError("film block: corrupt or truncated data");
-    std::vector<unsigned char> shuffled(values * sizeof(double));
-    const size_t n = ZSTD_decompress(shuffled.data(), shuffled.size(), compressed.data(), compressed.size());
-    if (ZSTD_isError(n) || n != shuffled.size())
+    if (scratch.size() < values * sizeof(double)) scratch.resize(values * sizeof(double));
+    const unsigned char *shuffled = scratch.data();
+    const size_t n = ZSTD_decompress(scratch.data(), values * sizeof(double), compressed.data(), compressed.size());
+    if (ZSTD_isError(n) || n != values * sizeof(double))
         throw FarmError(std::string("film block: ") + (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short data"));
 
     size_t first = 0;
     for (const auto &a : arrays) {
-        unshuffle(shuffled.data(), values, first, a.size(), a.data());
+        unshuffle(shuffled, values, first, a.size(), a.data());
         first += a.size();
         bool finite = true;
         for (const double v : a) finite &= std::isfinite(v);

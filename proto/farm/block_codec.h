@@ -6,6 +6,7 @@
 #pragma once
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "image/film.h"
 
@@ -17,5 +18,8 @@ std::string encodeBlock(const ImageBlock &block, int zstdLevel = 1);
 // throws FarmError naming the problem if it does not, if the data is corrupt, or if any value is not
 // finite (a renderer never produces those, so they mean a broken or hostile sender).
 void decodeBlock(std::string_view data, ImageBlock &block);
+// The same, decompressing into `scratch` (grown as needed, never shrunk), so that a caller that decodes
+// many blocks allocates and clears that memory once: the master, which decodes every result.
+void decodeBlock(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch);
 
 }  // namespace pf::farm

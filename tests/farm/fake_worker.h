@@ -3,6 +3,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "farm/harness.h"
 #include "farm/hash.h"
@@ -27,15 +28,31 @@ public:
         EXPECT_TRUE(stub_->LeaseTask(ctx().get(), req, &reply).ok());
         return reply.has_task() ? std::make_optional(reply.task()) : std::nullopt;
     }
-    // Delivers `payload` for `attempt`; the call's status must be `expected`.
+    // Up to `maxTasks` tasks in a row, for a batched result (tests/test_farm_batch.cpp).
+    std::vector<pathfarm::v1::TaskSpec> leaseBatch(int maxTasks) {
+        pathfarm::v1::LeaseRequest req;
+        req.set_worker_id(id_);
+        req.set_wait_ms(5000);
+        req.set_max_tasks(maxTasks);
+        pathfarm::v1::LeaseReply reply;
+        EXPECT_TRUE(stub_->LeaseTask(ctx().get(), req, &reply).ok());
+        std::vector<pathfarm::v1::TaskSpec> tasks;
+        if (reply.has_task()) tasks.push_back(reply.task());
+        tasks.insert(tasks.end(), reply.more().begin(), reply.more().end());
+        return tasks;
+    }
+    // Delivers `payload` for `attempt` (and, batched with it, for `batch`); the call's status must be
+    // `expected`.
     pathfarm::v1::CompleteReply complete(int64_t attempt, const std::string &payload,
-                                         grpc::StatusCode expected = grpc::StatusCode::OK) {
+                                         grpc::StatusCode expected = grpc::StatusCode::OK,
+                                         const std::vector<int64_t> &batch = {}) {
         pathfarm::v1::CompleteReply reply;
         const auto c = ctx();
         auto writer = stub_->CompleteTask(c.get(), &reply);
         pathfarm::v1::ResultChunk chunk;
         chunk.mutable_header()->set_worker_id(id_);
         chunk.mutable_header()->set_attempt_id(attempt);
+        for (const int64_t a : batch) chunk.mutable_header()->add_batch_attempt_ids(a);
         chunk.mutable_header()->set_payload_size(payload.size());
         chunk.mutable_header()->set_payload_hash(pf::farm::hashHex64(payload));
         if (writer->Write(chunk)) {

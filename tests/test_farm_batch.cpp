@@ -1,0 +1,206 @@
+// Batched results (issue 17): a worker leases image tasks that follow each other in a job, merges their
+// film blocks in task order and returns one result naming every attempt, so that the master decodes and
+// merges one film for all of them. Checked here: the image equals the embedded render up to the rounding of
+// the batch's own sum (it is added to the film as one block, not task by task), every task is merged exactly
+// once (also under a time budget), a batch that is out of order, repeats an attempt, names another worker's
+// attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master
+// restart with a batch waiting for its turn, loses no work.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "farm/block_codec.h"
+#include "farm/fake_worker.h"
+#include "farm/harness.h"
+#include "image/bitmap.h"
+#include "integrators/integrator.h"
+#include "render/image_task.h"
+#include "scene/scene.h"
+
+namespace pf::test::farm {
+namespace {
+
+namespace v1 = pathfarm::v1;
+using namespace std::chrono_literals;
+
+constexpr int kSpp = 64;  // eight tasks of 8 samples (render/image_task.h)
+const std::string kSpec = "--spp 64 --seed 2";
+
+// Pixels of two images agree up to a few float ulps: a batch's sum of doubles rounds differently from
+// the task-by-task merge in its last bits, which the float EXR mostly hides. Returns how many pixel
+// values differ at all.
+int64_t expectEqualUpToRounding(const std::string &exrA, const std::string &exrB) {
+    const Bitmap a = readEXR(exrA), b = readEXR(exrB);
+    EXPECT_EQ(a.rgb.size(), b.rgb.size());
+    int64_t differ = 0;
+    for (size_t i = 0; i < std::min(a.rgb.size(), b.rgb.size()); ++i) {
+        const float x = a.rgb[i], y = b.rgb[i];
+        differ += x != y;
+        EXPECT_LE(std::abs(x - y), 4 * 6e-8f * std::max(std::abs(x), std::abs(y))) << "value " << i;
+    }
+    return differ;
+}
+
+// Every issued task of the job merged exactly once.
+void expectMergedOnce(const Farm &farm, int64_t job, int64_t tasks) {
+    const std::string where = " FROM merges WHERE job_id = " + std::to_string(job);
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*)" + where), tasks);
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(DISTINCT task_idx)" + where), tasks);
+}
+
+// Film blocks of the test scene's tasks as a worker renders them, summed in task order: what a batch
+// of `tasks` carries.
+class Blocks {
+public:
+    explicit Blocks(const std::string &scene)
+        : loaded_(loadScene(scene)), integrator_(createIntegrator("path", loaded_->integratorProperties(), true)) {}
+    std::string batch(const std::vector<v1::TaskSpec> &tasks) const {
+        std::optional<ImageBlock> sum;
+        for (const v1::TaskSpec &t : tasks) {
+            ImageTaskResult r = runImageTask(*loaded_, dynamic_cast<const SamplingIntegrator &>(*integrator_), 2,
+                                             ImageTask{t.image().first_sample(), t.image().sample_count()}, 1);
+            if (sum) {
+                sum->merge(r.block);
+            } else {
+                sum.emplace(std::move(r.block));
+            }
+        }
+        return pf::farm::encodeBlock(*sum);
+    }
+
+private:
+    std::unique_ptr<Scene> loaded_;
+    std::unique_ptr<Integrator> integrator_;
+};
+
+std::vector<int64_t> laterAttempts(const std::vector<v1::TaskSpec> &tasks) {
+    std::vector<int64_t> out;
+    for (size_t i = 1; i < tasks.size(); ++i) out.push_back(tasks[i].attempt_id());
+    return out;
+}
+
+// A job of the test scene, its embedded render, and the fetched farm image.
+struct Job {
+    Job(const Farm &farm, int res)
+        : scene(writeTestScene(farm.dir() + "/scene", res, kSpp)),
+          reference(farm.embeddedRender(scene, kSpec, "embedded")) {
+        const auto [code, output] = farm.cli("submit " + scene + " " + kSpec);
+        EXPECT_EQ(code, 0) << output;
+        id = jobIdFrom(output);
+    }
+    std::string fetch(const Farm &farm) const {
+        EXPECT_EQ(farm.waitForJob(id, 60s).state(), v1::JOB_DONE);
+        const std::string out = farm.dir() + "/farm.exr";
+        const auto [code, output] = farm.cli("fetch " + std::to_string(id) + " -o " + out);
+        EXPECT_EQ(code, 0) << output;
+        return out;
+    }
+    std::string scene, reference;
+    int64_t id = -1;
+};
+
+TEST_F(FarmTest, ABatchingWorkerRendersTheEmbeddedImageUpToRounding) {
+    farm->startMaster();
+    const Job job(*farm, 24);
+    farm->startWorker(2, {"--batch", "4"});
+    const std::string out = job.fetch(*farm);
+    expectEqualUpToRounding(job.reference, out);
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+    // The worker batched: a batch's later tasks are stored without bytes of their own.
+    EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0"), 0);
+}
+
+TEST_F(FarmTest, ATimeBudgetWithBatchesMergesEveryIssuedTaskOnce) {
+    farm->startMaster();
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 16, kSpp);
+    farm->startWorker(2, {"--batch", "4"});
+    const auto [code, output] = farm->cli("submit " + scene + " --time 1 --seed 2");
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    const v1::Job done = farm->waitForJob(id, 60s);
+    ASSERT_EQ(done.state(), v1::JOB_DONE);
+    EXPECT_GT(done.tasks().merged(), 1);
+    expectMergedOnce(*farm, id, done.tasks().merged());
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM tasks WHERE job_id = " + std::to_string(id)),
+              done.tasks().merged());
+}
+
+TEST_F(FarmTest, ABatchIsTakenWholeOnceOrRefused) {
+    farm->startMaster();
+    const Job job(*farm, 16);
+    const Blocks blocks(job.scene);
+    FakeWorker w1(*farm), w2(*farm);
+    const std::vector<v1::TaskSpec> batch = w1.leaseBatch(3), other = w2.leaseBatch(1);
+    ASSERT_EQ(batch.size(), 3u);
+    ASSERT_EQ(other.size(), 1u);
+    for (size_t i = 0; i < batch.size(); ++i) EXPECT_EQ(batch[i].task_index(), batch[0].task_index() + int64_t(i));
+    const std::string payload = blocks.batch(batch);
+    const int64_t a0 = batch[0].attempt_id(), a1 = batch[1].attempt_id(), a2 = batch[2].attempt_id();
+    const int64_t foreign = other[0].attempt_id();
+
+    // Out of order, an attempt twice: refused as a bad request, nothing stored.
+    w1.complete(a0, payload, grpc::StatusCode::INVALID_ARGUMENT, {a2, a1});
+    EXPECT_NE(w1.lastError().find("is not image task"), std::string::npos) << w1.lastError();
+    w1.complete(a0, payload, grpc::StatusCode::INVALID_ARGUMENT, {a1, a1});
+    // Another worker's attempt, in either direction: ignored whole.
+    v1::CompleteReply r = w1.complete(a0, payload, grpc::StatusCode::OK, {a1, a2, foreign});
+    EXPECT_FALSE(r.accepted());
+    EXPECT_NE(r.reason().find("was not leased to worker"), std::string::npos) << r.reason();
+    r = w2.complete(foreign, payload, grpc::StatusCode::OK, {a0});
+    EXPECT_FALSE(r.accepted());
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM results"), 0);
+
+    // The batch itself, once; again, or one of its tasks alone, is superseded.
+    EXPECT_TRUE(w1.complete(a0, payload, grpc::StatusCode::OK, {a1, a2}).accepted());
+    r = w1.complete(a0, payload, grpc::StatusCode::OK, {a1, a2});
+    EXPECT_FALSE(r.accepted());
+    EXPECT_NE(r.reason().find("superseded"), std::string::npos) << r.reason();
+    EXPECT_FALSE(w1.complete(a1, blocks.batch({batch[1]})).accepted());
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM results"), 3);
+
+    EXPECT_TRUE(w2.complete(foreign, blocks.batch(other)).accepted());
+    for (std::vector<v1::TaskSpec> rest = w2.leaseBatch(64); !rest.empty(); rest = w2.leaseBatch(64))
+        EXPECT_TRUE(w2.complete(rest[0].attempt_id(), blocks.batch(rest), grpc::StatusCode::OK, laterAttempts(rest))
+                        .accepted());
+    expectEqualUpToRounding(job.reference, job.fetch(*farm));
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+}
+
+TEST_F(FarmTest, AWorkerThatGoesSilentHoldingABatchLosesNoWork) {
+    farm->startMaster(kFastLeases);
+    const Job job(*farm, 16);
+    {
+        // Leases four tasks and is never heard of again (as a killed worker), so they expire.
+        FakeWorker silent(*farm);
+        ASSERT_EQ(silent.leaseBatch(4).size(), 4u);
+    }
+    farm->startWorker(2, {"--batch", "3"});
+    expectEqualUpToRounding(job.reference, job.fetch(*farm));
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'expired'"), 4);
+}
+
+TEST_F(FarmTest, ABatchWaitingForItsTurnSurvivesAMasterRestart) {
+    farm->startMaster(kFastLeases);
+    const Job job(*farm, 16);
+    const Blocks blocks(job.scene);
+    FakeWorker first(*farm), batcher(*farm);
+    const auto head = first.leaseBatch(1);
+    const auto batch = batcher.leaseBatch(3);
+    ASSERT_EQ(head.size(), 1u);
+    ASSERT_EQ(batch.size(), 3u);
+    // Accepted, but it waits on disk for task 0, which the master's restart finds still leased.
+    EXPECT_TRUE(batcher.complete(batch[0].attempt_id(), blocks.batch(batch), grpc::StatusCode::OK, laterAttempts(batch))
+                    .accepted());
+    farm->killMaster();
+    farm->startMaster(kFastLeases);
+    EXPECT_TRUE(first.complete(head[0].attempt_id(), blocks.batch(head)).accepted());
+    for (std::vector<v1::TaskSpec> rest = first.leaseBatch(2); !rest.empty(); rest = first.leaseBatch(2))
+        EXPECT_TRUE(first.complete(rest[0].attempt_id(), blocks.batch(rest), grpc::StatusCode::OK, laterAttempts(rest))
+                        .accepted());
+    expectEqualUpToRounding(job.reference, job.fetch(*farm));
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+}
+
+}  // namespace
+}  // namespace pf::test::farm
