@@ -13,11 +13,11 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <ctime>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "bench_support.h"
 #include "core/rng.h"
 #include "core/warp.h"
 #include "image/film.h"
@@ -25,12 +25,6 @@
 #include "scene/scene.h"
 
 namespace {
-
-double processCpuSeconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 struct Rate {
     double wall, cpu;  // per second of wall-clock time and of process CPU time
@@ -56,7 +50,7 @@ Rate rawEmbreeRaysPerSecond(const pf::Scene &scene, int threads, size_t raysPerT
         }
     }
     const auto start = std::chrono::steady_clock::now();
-    const double cpuStart = processCpuSeconds();
+    const double cpuStart = bench::processCpuSeconds();
     std::vector<std::thread> pool;
     for (int t = 0; t < threads; ++t)
         pool.emplace_back([&, t] {
@@ -67,7 +61,7 @@ Rate rawEmbreeRaysPerSecond(const pf::Scene &scene, int threads, size_t raysPerT
     for (auto &th : pool) th.join();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double traced = static_cast<double>(threads * raysPerThread);
-    return {traced / secs, traced / (processCpuSeconds() - cpuStart)};
+    return {traced / secs, traced / (bench::processCpuSeconds() - cpuStart)};
 }
 
 }  // namespace
@@ -97,9 +91,9 @@ int main(int argc, char **argv) {
         opt.spp = spp;
         opt.threads = threads;
         pf::RenderStats stats;
-        const double cpuStart = processCpuSeconds();
+        const double cpuStart = bench::processCpuSeconds();
         integrator->render(*scene, opt, stats);
-        const double cpu = processCpuSeconds() - cpuStart;
+        const double cpu = bench::processCpuSeconds() - cpuStart;
         const double rays = stats.rays / stats.seconds, samples = stats.samples / stats.seconds;
         const double cpuRays = stats.rays / cpu, cpuSamples = stats.samples / cpu;
         std::printf("%-36s %7d %13.4g %13.4g %13.4g %6.1f%% | %13.4g %13.4g %13.4g %6.1f%%\n", path.c_str(), threads,
