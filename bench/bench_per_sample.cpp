@@ -3,7 +3,8 @@
 // next to Mitsuba 0.6's, before the speed of either enters; an equal-time ratio is then this ratio times
 // the ratio of samples per second). With --time, the same at equal time (issue 17): every render gets S
 // seconds of wall time and the samples (or mutations) it took are printed per pixel and per second and
-// core, the figures to set beside a Mitsuba 0.6 render of the same file (scripts/mitsuba-equal-time.sh).
+// core, the figures to set beside a Mitsuba 0.6 render of the same file (scripts/mitsuba-equal-time.sh), and
+// per second of the process's CPU time (bench::processCpuSeconds; comparable on a shared machine).
 //
 //   bench_per_sample [--res N] [--spp N | --time S] [--seeds K] [--integrators a,b,..] [--threads N]
 //                    [--reference FILE.exr | --ref-spp N] [--block B] [--worst M] [--image NAME=FILE.exr]...
@@ -149,19 +150,22 @@ int main(int argc, char **argv) {
         o.reference.empty() ? ("pathfarm bdpt, " + std::to_string(o.refSpp) + " spp").c_str() : o.reference.c_str());
     const std::vector<pf::Spectrum> refBlocks = blockMeans(reference, o.block);
     // Samples: pixel samples, or mutations for the Markov-chain integrators (their RenderStats::samples).
-    std::printf("%-8s %24s %24s %14s %16s\n", "", "relMSE (pixels)",
-                ("relMSE (" + std::to_string(o.block) + "^2 blocks)").c_str(), "samples/px", "samples/s/core");
+    std::printf("%-8s %24s %24s %14s %16s %14s\n", "", "relMSE (pixels)",
+                ("relMSE (" + std::to_string(o.block) + "^2 blocks)").c_str(), "samples/px", "samples/s/core",
+                "samples/cpu-s");
 
     std::vector<double> worstErrors;       // first integrator: block error summed over seeds
     std::vector<pf::Spectrum> worstMeans;  // and its block means, averaged over seeds
     for (const std::string &type : o.integrators) {
         std::vector<double> pixel, block;
-        double samples = 0, seconds = 0;
+        double samples = 0, seconds = 0, cpuSeconds = 0;
         std::vector<double> sumErrors(refBlocks.size(), 0.0);
         std::vector<pf::Spectrum> sumMeans(refBlocks.size(), pf::Spectrum(0.0));
         for (int k = 1; k <= o.seeds; ++k) {
             pf::RenderStats stats;
+            const double cpuStart = bench::processCpuSeconds();
             const pf::Bitmap image = render(*scene, type, o.spp, o.time, static_cast<uint64_t>(k), o.threads, stats);
+            cpuSeconds += bench::processCpuSeconds() - cpuStart;
             samples += static_cast<double>(stats.samples);
             seconds += stats.seconds;
             pixel.push_back(bench::relativeError(image, reference).all);
@@ -174,9 +178,9 @@ int main(int argc, char **argv) {
             }
         }
         const MeanError p = meanOf(pixel), b = meanOf(block);
-        std::printf("%-8s %12.4g +- %-9.2g %12.4g +- %-9.2g %14.4g %16.4g\n", type.c_str(), p.mean, p.stderr_, b.mean,
-                    b.stderr_, samples / (o.seeds * static_cast<double>(o.res) * o.res),
-                    samples / std::max(seconds, 1e-9) / o.threads);
+        std::printf("%-8s %12.4g +- %-9.2g %12.4g +- %-9.2g %14.4g %16.4g %14.4g\n", type.c_str(), p.mean, p.stderr_,
+                    b.mean, b.stderr_, samples / (o.seeds * static_cast<double>(o.res) * o.res),
+                    samples / std::max(seconds, 1e-9) / o.threads, samples / std::max(cpuSeconds, 1e-9));
         if (worstErrors.empty()) {
             worstErrors = sumErrors;
             worstMeans = sumMeans;

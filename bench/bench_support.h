@@ -4,6 +4,7 @@
 #pragma once
 #include <unistd.h>
 
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -16,6 +17,14 @@
 #include "scene/scene.h"
 
 namespace bench {
+
+// CPU time of the whole process (all threads), in seconds. Rates per CPU second are the figures to compare
+// on a machine shared with other work, where wall-clock rates follow the load (issue 17's A/B pairs).
+inline double processCpuSeconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 // The scene at res x res with its sensor's sampleCount set to `spp`, through a rewritten copy of the file
 // beside links to the scene's other files (in a per-process temporary directory named after `tag`).

@@ -13,6 +13,7 @@
 
 #include "bsdf/bsdf.h"
 #include "emitter/emitter.h"
+#include "manifold/manifold_vertex.h"
 #include "scene/plugins.h"
 #include "scene/scene.h"
 #include "shape/trianglemesh.h"
@@ -236,6 +237,8 @@ Intersection hitAt(const Scene &scene, const Param &param, const Vec2 &uv) {
                                    param(Vec2(uv.x, uv.y + h)) - param(Vec2(uv.x, uv.y - h))));
     Intersection its;
     EXPECT_TRUE(scene.intersect(Ray(p + n * 0.01, -n), its)) << "no hit at " << p;
+    // The normal derivatives as the manifold code sees them (meshes compute them on request).
+    if (its.normalDerivativesPending) its.shape->fillNormalDerivatives(its);
     return its;
 }
 
@@ -376,6 +379,25 @@ MeshData bentTriangle(bool withUVs, bool withNormals) {
 
 std::shared_ptr<TriangleMesh> makeMesh(MeshData d, const MeshOptions &opts = {}) {
     return std::make_shared<TriangleMesh>(shapeProps("mesh"), std::move(d), opts, "test mesh");
+}
+
+// A mesh hit defers dn/du and dn/dv (issue 17): pending after intersection, then filled on request with the
+// values the manifold code reads, and ManifoldVertex::surface, the manifold code's entry, completes them itself.
+TEST(Differentials, MeshNormalDerivativesOnRequest) {
+    auto scene = makeScene({makeMesh(bentTriangle(true, true))});
+    Intersection its;
+    ASSERT_TRUE(scene->intersect(Ray(Vec3(0.8, 0.5, 5), Vec3(0, 0, -1)), its));
+    EXPECT_TRUE(its.normalDerivativesPending);
+    EXPECT_TRUE(its.dndu.isZero() && its.dndv.isZero());
+    const std::optional<ManifoldVertex> v = ManifoldVertex::surface(its, Scattering::Reflection);
+    its.shape->fillNormalDerivatives(its);
+    EXPECT_FALSE(its.normalDerivativesPending);
+    EXPECT_FALSE(its.dndu.isZero());
+    EXPECT_FALSE(its.dndv.isZero());
+    ASSERT_TRUE(v);
+    EXPECT_FALSE(v->its.normalDerivativesPending);
+    EXPECT_EQ(v->its.dndu, its.dndu);
+    EXPECT_EQ(v->its.dndv, its.dndv);
 }
 
 TEST(Differentials, Meshes) {

@@ -13,6 +13,37 @@
 
 namespace pf {
 
+namespace {
+
+// The subpaths and buffers of one evaluate call, kept per thread, so that a sample allocates nothing once
+// they have grown (issue 17: a malloc and free per subpath and buffer showed in the profiles). A visitor
+// that evaluates again inside a call gets buffers of its own.
+struct Workspace {
+    Path camera, light;
+    JoinedPath path;
+    std::vector<Vec2> emitterDirect, sensorDirect;
+    std::vector<double> pFwd, pRev;
+    bool busy = false;
+};
+
+class WorkspaceLease {
+public:
+    WorkspaceLease() : workspace_(perThread_.busy ? nested_.emplace() : perThread_) { workspace_.busy = true; }
+    ~WorkspaceLease() { workspace_.busy = false; }
+    WorkspaceLease(const WorkspaceLease &) = delete;
+    WorkspaceLease &operator=(const WorkspaceLease &) = delete;
+    Workspace &operator*() const { return workspace_; }
+
+private:
+    static thread_local Workspace perThread_;
+    std::optional<Workspace> nested_;
+    Workspace &workspace_;
+};
+
+thread_local Workspace WorkspaceLease::perThread_;
+
+}  // namespace
+
 BDPT::BDPT(const Properties &props) {
     maxDepth_ = static_cast<int>(props.getInt("maxDepth", -1));
     rrDepth_ = static_cast<int>(props.getInt("rrDepth", 5));
@@ -37,17 +68,21 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     // A path of n vertices has n - 1 edges; the emitter walk takes one vertex more than it can connect,
     // so that its last edge can still cross the lens (t = 0).
     const int maxVertices = maxDepth_ < 0 ? -1 : maxDepth_ + 1;
-    Path camera, light;
+    const WorkspaceLease lease;
+    Workspace &w = *lease;
+    Path &camera = w.camera, &light = w.light;
+    JoinedPath &path = w.path;
+    std::vector<Vec2> &emitterDirect = w.emitterDirect, &sensorDirect = w.sensorDirect;
+    std::vector<double> &pFwd = w.pFwd, &pRev = w.pRev;
     camera.sample(scene, sampler, TransportMode::Radiance, maxVertices, rrDepth_, raster);
     light.sample(scene, sampler, TransportMode::Importance, maxVertices, rrDepth_);
-    std::vector<Vec2> emitterDirect, sensorDirect;
+    emitterDirect.clear();
+    sensorDirect.clear();
     if (mis_.sampleDirect) {
         for (int t = 2; t <= camera.size(); ++t) emitterDirect.push_back(sampler.next2D());
         for (int s = 2; s <= light.size(); ++s) sensorDirect.push_back(sampler.next2D());
     }
 
-    JoinedPath path;
-    std::vector<double> pFwd, pRev;
     const auto wanted = [&](int s, int t) {
         return (!only || *only == Strategy(s, t)) && (maxDepth_ < 0 || s + t - 1 <= maxDepth_) &&
                (mis_.lightImage || t >= 2);

@@ -4,8 +4,7 @@
 // or next-event estimation would miss paths that BSDF sampling finds and the MIS combination would be
 // biased. Media attenuate each segment by exp(-sigma_t * length) (ALGORITHMS.md §1.1: the tau in G).
 #pragma once
-#include <functional>
-
+#include "core/function_ref.h"
 #include "core/spectrum.h"
 #include "scene/intersection.h"
 
@@ -26,7 +25,7 @@ Spectrum transmittance(const Scene &scene, Ray ray);
 Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, bool trackMedia = true);
 
 // Called for each surface a walk reaches, with the transmittance from the ray origin up to it.
-using SurfaceVisitor = std::function<void(const Intersection &its, const Spectrum &T)>;
+using SurfaceVisitor = FunctionRef<void(const Intersection &its, const Spectrum &T)>;
 
 // The walk behind transmittance(scene, ray, medium), for callers that also need the surfaces on the way
 // (volpath collects the emission of every surface a sampled direction reaches). Calls visit at each

@@ -4,6 +4,7 @@
 #include "core/frame.h"
 #include "manifold/specular_constraint.h"
 #include "path/vertex.h"
+#include "scene/shape.h"
 
 namespace pf {
 
@@ -41,11 +42,12 @@ std::optional<ManifoldVertex> ManifoldVertex::surface(const Intersection &its, S
     v.type = ManifoldVertexType::Surface;
     v.p = its.p;
     v.its = its;
+    if (its.normalDerivativesPending) its.shape->fillNormalDerivatives(v.its);
     v.scattering = scattering;
     v.eta = eta;
     v.ng = its.n;
     v.n = its.shFrame.n;
-    if (!orthonormalizeChart(v, its.dpdu, its.dpdv, its.dndu, its.dndv)) {
+    if (!orthonormalizeChart(v, its.dpdu, its.dpdv, v.its.dndu, v.its.dndv)) {
         if (scattering != Scattering::None) return std::nullopt;
         flatChart(v, its.n);
         v.n = its.shFrame.n;

@@ -1,6 +1,8 @@
 // A ray-surface intersection with full local differential geometry. Manifold exploration
 // (ALGORITHMS.md §6.2) needs dp/du, dp/dv, dn/du and dn/dv at every vertex; all shapes fill them and
-// tests/test_shapes.cpp checks them against finite differences.
+// tests/test_shapes.cpp checks them against finite differences. Meshes leave dn/du and dn/dv out of a hit
+// (normalDerivativesPending) until Shape::fillNormalDerivatives: nothing but the manifold code reads them,
+// and on every other hit they cost about a third of the mesh's differential geometry (issue 17's profile).
 #pragma once
 #include <cstdint>
 
@@ -21,10 +23,12 @@ struct Intersection {
     Frame shFrame;         // shading frame; shFrame.n is the shading normal (same hemisphere as n)
     Vec2 uv;               // surface parameterization
     Vec3 dpdu, dpdv;       // position partials
-    Vec3 dndu, dndv;       // shading-normal partials (of the normalized shading normal)
+    Vec3 dndu, dndv;       // shading-normal partials (of the normalized shading normal); see above
     Vec3 wi;               // incident direction (towards the ray origin) in the local shading frame
     const Shape *shape = nullptr;
     uint32_t primIndex = 0;
+    Vec2 primUV;                            // the hit's coordinates on primitive primIndex (a mesh's b1, b2)
+    bool normalDerivativesPending = false;  // dndu, dndv not computed yet (Shape::fillNormalDerivatives)
     // Instance transform applied to the shape, if any, is already folded into all the above.
 
     bool isValid() const { return shape != nullptr; }

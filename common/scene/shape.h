@@ -27,6 +27,8 @@ public:
     // Analytic shapes re-intersect in double precision here.
     virtual void fillIntersection(const Ray &ray, double t, uint32_t primIndex, const Vec2 &embreeUV,
                                   Intersection &its) const = 0;
+    // Computes dn/du and dn/dv of a hit that fillIntersection left with normalDerivativesPending (meshes).
+    virtual void fillNormalDerivatives(Intersection &) const {}
     virtual AABB bbox() const = 0;
     virtual double surfaceArea() const = 0;
     virtual size_t primitiveCount() const = 0;

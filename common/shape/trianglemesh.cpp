@@ -216,57 +216,73 @@ unsigned TriangleMesh::addToEmbree(RTCDevice device, RTCScene scene) const {
     return id;
 }
 
-void TriangleMesh::fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const {
+Vec3 TriangleMesh::surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Vec3 &ng, Vec2 &uv) const {
     const auto &tri = triangles_[prim];
     const Vec3 &p0 = positions_[tri[0]], &p1 = positions_[tri[1]], &p2 = positions_[tri[2]];
-    const Vec3 e1 = p1 - p0, e2 = p2 - p0;
     const double b0 = 1.0 - b1 - b2;
-    its.p = p0 * b0 + p1 * b1 + p2 * b2;
-    Vec3 ng = normalize(cross(e1, e2));
+    p = p0 * b0 + p1 * b1 + p2 * b2;
+    ng = normalize(cross(p1 - p0, p2 - p0));
+    uv = uvs_.empty() ? Vec2(b1, b2) : uvs_[tri[0]] * b0 + uvs_[tri[1]] * b1 + uvs_[tri[2]] * b2;
+    if (normals_.empty()) return Vec3();
+    const Vec3 N = normals_[tri[0]] * b0 + normals_[tri[1]] * b1 + normals_[tri[2]] * b2;
+    // The geometric normal follows the side the shading normals point to (Mitsuba and pbrt-v3 §3.6.2), so
+    // that vertex normals decide the orientation of smooth meshes. The sign needs no normalization of N.
+    if (dot(ng, N) < 0) ng = -ng;
+    return N;
+}
 
-    // (j00 j01; j10 j11) = d(b1, b2)/d(u, v), the chart's inverse Jacobian (pbrt-v3 §3.6.2).
-    double j00 = 1, j01 = 0, j10 = 0, j11 = 1;
-    if (!uvs_.empty()) {
-        const Vec2 &t0 = uvs_[tri[0]], &t1 = uvs_[tri[1]], &t2 = uvs_[tri[2]];
-        its.uv = t0 * b0 + t1 * b1 + t2 * b2;
-        const Vec2 d1 = t1 - t0, d2 = t2 - t0;
-        const double det = d1.x * d2.y - d1.y * d2.x;
-        // A texture mapping that folds the triangle onto (almost) a line has no inverse: the barycentric
-        // chart stands in for it, so that dp/du and dp/dv stay a basis of the tangent plane.
-        if (std::abs(det) > 1e-10 * (d1.x * d1.x + d1.y * d1.y + d2.x * d2.x + d2.y * d2.y)) {
-            j00 = d2.y / det;
-            j01 = -d2.x / det;
-            j10 = -d1.y / det;
-            j11 = d1.x / det;
-        }
-    } else {
-        its.uv = Vec2(b1, b2);
+TriangleMesh::InverseChart TriangleMesh::inverseChart(uint32_t prim) const {
+    InverseChart j;
+    if (uvs_.empty()) return j;
+    const auto &tri = triangles_[prim];
+    const Vec2 &t0 = uvs_[tri[0]], &t1 = uvs_[tri[1]], &t2 = uvs_[tri[2]];
+    const Vec2 d1 = t1 - t0, d2 = t2 - t0;
+    const double det = d1.x * d2.y - d1.y * d2.x;
+    // A texture mapping that folds the triangle onto (almost) a line has no inverse: the barycentric chart
+    // stands in for it, so that dp/du and dp/dv stay a basis of the tangent plane.
+    if (std::abs(det) > 1e-10 * (d1.x * d1.x + d1.y * d1.y + d2.x * d2.x + d2.y * d2.y)) {
+        j.j00 = d2.y / det;
+        j.j01 = -d2.x / det;
+        j.j10 = -d1.y / det;
+        j.j11 = d1.x / det;
     }
-    its.dpdu = e1 * j00 + e2 * j10;
-    its.dpdv = e1 * j01 + e2 * j11;
+    return j;
+}
 
-    Vec3 ns = ng;
+void TriangleMesh::fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const {
+    const Vec3 N = surfacePoint(prim, b1, b2, its.p, its.n, its.uv);
+    const double len = N.length();
+    const Vec3 ns = len > 0 ? N / len : its.n;
+    const auto &tri = triangles_[prim];
+    const Vec3 &p0 = positions_[tri[0]];
+    const Vec3 e1 = positions_[tri[1]] - p0, e2 = positions_[tri[2]] - p0;
+    const InverseChart j = inverseChart(prim);
+    its.dpdu = e1 * j.j00 + e2 * j.j10;
+    its.dpdv = e1 * j.j01 + e2 * j.j11;
     its.dndu = its.dndv = Vec3();
-    if (!normals_.empty()) {
-        const Vec3 &n0 = normals_[tri[0]], &n1 = normals_[tri[1]], &n2 = normals_[tri[2]];
-        const Vec3 N = n0 * b0 + n1 * b1 + n2 * b2;
-        const double len = N.length();
-        if (len > 0) {
-            ns = N / len;
-            // d(N/|N|) = (I - ns ns^T) dN / |N|, with dN/db1 = n1 - n0 and dN/db2 = n2 - n0.
-            const Vec3 d1 = n1 - n0, d2 = n2 - n0;
-            const Vec3 dn1 = (d1 - ns * dot(ns, d1)) / len, dn2 = (d2 - ns * dot(ns, d2)) / len;
-            its.dndu = dn1 * j00 + dn2 * j10;
-            its.dndv = dn1 * j01 + dn2 * j11;
-            // The geometric normal follows the side the shading normals point to (Mitsuba and pbrt-v3
-            // §3.6.2), so that vertex normals decide the orientation of smooth meshes.
-            if (dot(ng, ns) < 0) ng = -ng;
-        }
-    }
-    its.n = ng;
+    its.normalDerivativesPending = !normals_.empty();
     its.shFrame = Frame::fromNormalTangent(ns, its.dpdu);
     its.shape = this;
     its.primIndex = prim;
+    its.primUV = Vec2(b1, b2);
+}
+
+void TriangleMesh::fillNormalDerivatives(Intersection &its) const {
+    if (!its.normalDerivativesPending) return;
+    its.normalDerivativesPending = false;
+    const auto &tri = triangles_[its.primIndex];
+    const double b1 = its.primUV.x, b2 = its.primUV.y, b0 = 1.0 - b1 - b2;
+    const Vec3 &n0 = normals_[tri[0]], &n1 = normals_[tri[1]], &n2 = normals_[tri[2]];
+    const Vec3 N = n0 * b0 + n1 * b1 + n2 * b2;
+    const double len = N.length();
+    if (!(len > 0)) return;  // the geometric normal stood in: constant, dn = 0
+    const Vec3 ns = N / len;
+    // d(N/|N|) = (I - ns ns^T) dN / |N|, with dN/db1 = n1 - n0 and dN/db2 = n2 - n0.
+    const Vec3 d1 = n1 - n0, d2 = n2 - n0;
+    const Vec3 dn1 = (d1 - ns * dot(ns, d1)) / len, dn2 = (d2 - ns * dot(ns, d2)) / len;
+    const InverseChart j = inverseChart(its.primIndex);
+    its.dndu = dn1 * j.j00 + dn2 * j.j10;
+    its.dndv = dn1 * j.j01 + dn2 * j.j11;
 }
 
 void TriangleMesh::fillIntersection(const Ray &ray, double t, uint32_t primIndex, const Vec2 &embreeUV,
@@ -297,11 +313,7 @@ void TriangleMesh::samplePosition(PositionSample &ps, const Vec2 &u) const {
     double ux;
     const size_t prim = areaDist_.sampleDiscrete(u.x, nullptr, &ux);
     const Vec2 b = warp::squareToUniformTriangle(Vec2(ux, u.y));
-    Intersection its;
-    fillSurface(static_cast<uint32_t>(prim), b.x, b.y, its);
-    ps.p = its.p;
-    ps.n = its.n;
-    ps.uv = its.uv;
+    surfacePoint(static_cast<uint32_t>(prim), b.x, b.y, ps.p, ps.n, ps.uv);  // a position needs no shading frame
     ps.pdf = 1.0 / area_;
     ps.measure = Measure::Area;
     ps.shape = this;

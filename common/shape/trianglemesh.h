@@ -51,6 +51,7 @@ public:
     unsigned addToEmbree(RTCDevice device, RTCScene scene) const override;
     void fillIntersection(const Ray &ray, double t, uint32_t primIndex, const Vec2 &embreeUV,
                           Intersection &its) const override;
+    void fillNormalDerivatives(Intersection &its) const override;
     AABB bbox() const override { return bbox_; }
     double surfaceArea() const override { return area_; }
     size_t primitiveCount() const override { return triangles_.size(); }
@@ -73,7 +74,17 @@ private:
     void rebuildCreases(double maxAngleDeg);
     // Recomputes the area distribution, total area and bounding box.
     void updateSamplingData();
-    // Surface point of triangle `prim` at barycentrics (b1, b2): position, normals, uv and partials.
+    // (j00 j01; j10 j11) = d(b1, b2)/d(u, v), the inverse Jacobian of triangle prim's texture chart (pbrt-v3
+    // §3.6.2); the identity where the barycentric chart stands in.
+    struct InverseChart {
+        double j00 = 1, j01 = 0, j10 = 0, j11 = 1;
+    };
+    InverseChart inverseChart(uint32_t prim) const;
+    // Point of triangle `prim` at barycentrics (b1, b2): position, geometric normal (on the side of the
+    // vertex normals), uv; returns the interpolated vertex normal, not normalized (zero without normals).
+    Vec3 surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Vec3 &ng, Vec2 &uv) const;
+    // The full hit at barycentrics (b1, b2): surfacePoint, partials and shading frame; dn/du and dn/dv are
+    // left to fillNormalDerivatives.
     void fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const;
 
     std::vector<Vec3> positions_, normals_;
