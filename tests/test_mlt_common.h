@@ -148,15 +148,15 @@ inline std::vector<std::pair<std::string, std::string>> withMaxDepth(
 // A BDPT reference: block means over `seeds` renders of `spp` samples per pixel, computed once per
 // (scene, resolution, seeds, spp, maxDepth) for all the cases of a test binary.
 inline const BlockStats &bdptReference(const std::string &name, const Scene &scene, int block, int seeds, int spp,
-                                       int maxDepth) {
+                                       int maxDepth, const std::string &type = "bdpt") {
     static std::map<std::string, BlockStats> cache;
     const Film &film = scene.sensor().film();
-    const std::string key = name + "/" + std::to_string(film.cropWidth()) + "/" + std::to_string(block) + "/" +
-                            std::to_string(seeds) + "/" + std::to_string(spp) + "/" + std::to_string(maxDepth);
+    const std::string key = type + "/" + name + "/" + std::to_string(film.cropWidth()) + "/" + std::to_string(block) +
+                            "/" + std::to_string(seeds) + "/" + std::to_string(spp) + "/" + std::to_string(maxDepth);
     const auto it = cache.find(key);
     if (it != cache.end()) return it->second;
     return cache[key] =
-               blockStats(scene, *makeTestIntegrator(scene, "bdpt", withMaxDepth({}, maxDepth)), block, seeds, spp, 1);
+               blockStats(scene, *makeTestIntegrator(scene, type, withMaxDepth({}, maxDepth)), block, seeds, spp, 1);
 }
 
 // How a convergence test is run: image size, block size, renders, the reference's samples per pixel, the
@@ -168,6 +168,7 @@ struct ConvergenceSetup {
     double timeLimit = 0;  // > 0: the chains render under this wall-time budget (seconds) instead
     double sigmas = 4.5, maxMedianError = 0.05, maxImageError = 0.03;
     int maxDepth = 0;
+    std::string reference = "bdpt";  // the reference integrator (`volpath` for scenes with media, too)
 };
 
 // The set-up of the long suites (label "long"): 32 x 32, 32 independent renders against a 128 spp BDPT
@@ -240,8 +241,9 @@ inline void expectConvergence(const std::string &name, const std::string &type,
     const auto integrator = makeTestIntegrator(*scene, type, withMaxDepth(params, s.maxDepth));
     const BlockStats chains =
         blockStats(*scene, *integrator, s.block, s.seeds, bursts ? 0 : s.budget, 2, 2, s.timeLimit);
-    const BlockStats &reference = bdptReference(name, *scene, s.block, s.seeds, s.referenceSpp, s.maxDepth);
-    printAgreement(reference, chains, what);
+    const BlockStats &reference =
+        bdptReference(name, *scene, s.block, s.seeds, s.referenceSpp, s.maxDepth, s.reference);
+    printAgreement(reference, chains, s.reference == "bdpt" ? what : what + " against " + s.reference);
     expectBlocksAgree(reference, chains, s.sigmas, s.maxMedianError, s.maxImageError, what);
 }
 

@@ -73,6 +73,28 @@ double heldSegment(const PathView &x, int v, int dir, int moving) {
     return (x.vertex(v).position() - x.vertex(v - dir).position()).length();
 }
 
+// Vertices that can be x_b: surfaces, and medium vertices (§6.7: a medium vertex is a non-specular vertex like any
+// other; without it, a path that the camera sees through glass into a medium, E S M .., could never move on the
+// film).
+bool movable(const PathVertex &v) { return v.type == VertexType::Surface || v.type == VertexType::Medium; }
+
+// The walk's target for x_b at v: a surface point, or a medium point on the plane facing `toward` (§6.7).
+std::optional<ManifoldVertex> walkTarget(const PathVertex &v, const Vec3 &toward) {
+    return v.type == VertexType::Medium ? ManifoldVertex::mediumEndpoint(v.position(), toward)
+                                        : ManifoldVertex::surface(v.its);
+}
+
+// Whether strategy st can move x's x_b: a medium x_b only with ideal specular chains on both sides, since the
+// offset Jacobian (manifold/offset_jacobian.h) holds a surface x_b between held glossy or medium vertices, not a
+// free point of a volume. Such a classification is a failed proposal, like an unusable x_b.
+bool supportedMove(const PathView &x, int source, int moving, int fixed) {
+    if (x.vertex(moving).type != VertexType::Medium) return true;
+    const int dir = fixed > source ? 1 : -1;
+    for (int i = source + dir; i != fixed; i += dir)
+        if (i != moving && isNonSpecular(x.vertex(i))) return false;
+    return true;
+}
+
 bool onFilm(const Film &film, const Vec2 &raster) {
     return raster.x >= 0 && raster.y >= 0 && raster.x < film.cropWidth() && raster.y < film.cropHeight();
 }
@@ -159,7 +181,7 @@ double ManifoldPerturbation::measureRatio(const PathView &y, int end, int moving
 
 // The edges are traced from `from` (the walk's mode); rho converts the ideal sub-chains' measure; 0 when
 // degenerate.
-double ManifoldPerturbation::toCanonical(const PathView &y, int from, int moving) {
+double ManifoldPerturbation::toCanonical(const PathView &y, int from, int moving, bool placedEnd) {
     const int dir = moving > from ? 1 : -1, mode = modeIndex(walkMode(dir));
     double factor = 1.0;
     for (int u = from; u != moving && factor > 0;) {
@@ -167,7 +189,8 @@ double ManifoldPerturbation::toCanonical(const PathView &y, int from, int moving
         // The walk's own probability of crossing each traced edge (free-flight survival), except that an edge
         // into a medium vertex of the chain is placed at its held length, not sampled (§6.7); rho holds the
         // sensor walk's densities instead, which differ from these at medium ends.
-        const bool held = heldSegment(y, w, dir, moving) > 0;
+        const bool held =
+            heldSegment(y, w, dir, moving) > 0 || (placedEnd && w == moving && y.vertex(w).type == VertexType::Medium);
         double walked = 1.0, sensor = 1.0;
         for (int e = u; e != w; e += dir) {
             const PathEdge &edge = y.edge(std::min(e, e + dir));
@@ -252,7 +275,7 @@ std::vector<ManifoldPerturbation::Source> ManifoldPerturbation::sources(const Pa
     const auto reachable = [&](int s, int dir) {
         for (int b = s + dir; inPath(b); b += dir) {
             const double psiB = chainProbability(x.vertex(b));
-            if (psiB < 1 && x.vertex(b).type == VertexType::Surface && reachableEnd(b, dir)) return true;
+            if (psiB < 1 && movable(x.vertex(b)) && reachableEnd(b, dir)) return true;
             if (psiB <= 0) return false;
         }
         return false;
@@ -278,9 +301,10 @@ std::optional<ManifoldPerturbation::Strategy> ManifoldPerturbation::classify(Sam
         if (psi >= 1 || (psi > 0 && sampler.next1D() < psi)) continue;
         if (moving >= 0) {
             if (!usableEnd(x.vertex(j))) return std::nullopt;
+            if (!supportedMove(x, source.vertex, moving, j)) return std::nullopt;
             return Strategy{source.vertex, moving, j};
         }
-        if (x.vertex(j).type != VertexType::Surface) return std::nullopt;
+        if (!movable(x.vertex(j))) return std::nullopt;
         moving = j;
     }
     return std::nullopt;
@@ -383,7 +407,8 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     const int dir = st.moving > st.fixed ? 1 : -1;
     const PathVertex &moved = y.vertex(st.moving);
     const auto chain = manifoldChain(x, st.fixed, st.moving);
-    const auto target = ManifoldVertex::surface(moved.its);
+    const Vec3 &neighbour = x.vertex(st.moving - dir).position();
+    const auto target = walkTarget(moved, neighbour);
     if (!chain || !target || !isNonSpecular(moved)) return false;
     const WalkResult walked = walk_.walk(*chain, *target);
     stats_.walks += 1;
@@ -402,7 +427,11 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     for (int cur = st.fixed;;) {
         const int next = nextSmooth(x, cur, st.moving);
         const size_t i = static_cast<size_t>(std::abs(next - st.fixed));
-        if (!propagate(scene, sampler, walkMode(dir), x, traced, cur, next, d, heldSegment(x, next, dir, st.moving)) ||
+        // A medium x'_b is placed where the walk put it, not sampled (toCanonical()'s placed end).
+        const double held = next == st.moving && moved.type == VertexType::Medium
+                                ? (walked.chain[i].p - walked.chain[i - 1].p).length()
+                                : heldSegment(x, next, dir, st.moving);
+        if (!propagate(scene, sampler, walkMode(dir), x, traced, cur, next, d, held) ||
             (traced.vertex(next).position() - walked.chain[i].p).length() >
                 kRayOffsets * scene.epsilonAt(walked.chain[i].p))
             return false;
@@ -417,7 +446,7 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
 
     // The reverse walk must bring the chain back to x's (mandatory, §6.5).
     const auto back = manifoldChain(y, st.fixed, st.moving);
-    const auto origin = ManifoldVertex::surface(x.vertex(st.moving).its);
+    const auto origin = walkTarget(x.vertex(st.moving), neighbour);
     if (!back || !origin) return false;
     const WalkResult returned = walk_.walk(*back, *origin);
     stats_.reverseWalks += 1;
@@ -437,6 +466,7 @@ double ManifoldPerturbation::density(const Scene &scene, const PathView &x, cons
     const Strategy st{source, record.moving, fixed};
     const int dir = fixed > source ? 1 : -1;
     if ((st.moving - source) * dir <= 0 || (fixed - st.moving) * dir <= 0) return 0.0;
+    if (!supportedMove(x, source, st.moving, fixed)) return 0.0;
     const std::vector<Source> list = sources(x);
     if (std::none_of(list.begin(), list.end(), [&](const Source &s) { return s.vertex == source && s.dir == dir; }))
         return 0.0;
@@ -446,7 +476,7 @@ double ManifoldPerturbation::density(const Scene &scene, const PathView &x, cons
     const double strategy = classificationProbability(x, st) / static_cast<double>(list.size());
     if (!(strategy > 0)) return 0.0;
     // The second chain, found by the walk; a junction x_b x_c is a deterministic connection.
-    const double second = std::abs(fixed - st.moving) > 1 ? toCanonical(y, fixed, st.moving) : 1.0;
+    const double second = std::abs(fixed - st.moving) > 1 ? toCanonical(y, fixed, st.moving, true) : 1.0;
     if (isPositionSource(x, source)) {
         // The Gaussian offset's density per unit area of the (planar) light or aperture.
         const PathVertex &v = x.vertex(st.moving), &w = y.vertex(st.moving);

@@ -75,6 +75,13 @@
 // T then carries J with (o, ℓ) as held coordinates of each medium vertex, in the volume measure
 // (manifold/offset_jacobian.h), and G_o through medium vertices (manifold/chain_jacobian.h's length rows).
 //
+// A medium vertex can also be x_b, the vertex that moves (§6.7: a medium vertex is non-specular like a diffuse
+// one; the camera seeing a medium through glass, E S M .., has no other vertex whose move reaches the film): the
+// first chain's propagation samples its new distance by free flight (so T has that edge's free-flight density,
+// per unit length, and x'_b's density is per unit volume), and the second chain's walk aims at it on the plane
+// facing its neighbour (a MediumEndpoint target, manifold_walk.h) and places it there (no free-flight density on
+// that edge). Only with ideal specular chains on both sides: the offset Jacobian holds surface x_b only.
+//
 // Reversibility (§6.5, mandatory): a proposal is kept only if walking the second chain back from y to x's
 // x_b converges to x's chain (its first walked vertex within a relative tolerance).
 //
@@ -149,8 +156,9 @@ public:
 
 private:
     // 1 / rho of y's ideal sub-chains between `from` and x_b, times the free-flight probabilities of the
-    // single edges between them.
-    static double toCanonical(const PathView &y, int from, int moving);
+    // single edges between them. placedEnd: the second chain, whose walk places a medium x_b (its edge has no
+    // free-flight probability); the first chain samples it by free flight.
+    static double toCanonical(const PathView &y, int from, int moving, bool placedEnd = false);
     // The statistics of one chain's run (a MutationSet is built per chain, so nothing is shared).
     struct Statistics {
         double walks = 0, converged = 0, iterations = 0, chainVertices = 0, maxChainVertices = 0;
