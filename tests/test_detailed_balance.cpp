@@ -126,6 +126,8 @@ bool reverseStructurallyImpossible(const Scene &scene, const Mutation &mutation,
 }
 
 struct BalanceCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const BalanceCase &c, std::ostream *os) { *os << c.scene << " " << mutationName(c.type); }
     std::string scene;
     MutationType type;
 };
@@ -305,6 +307,8 @@ bool drawProposal(const Scene &scene, const Mutation &mutation, const MutablePat
 }
 
 struct JacobianCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const JacobianCase &c, std::ostream *os) { *os << c.scene << " " << mutationName(c.type); }
     std::string scene;
     MutationType type;
 };

@@ -68,6 +68,8 @@ INSTANTIATE_TEST_SUITE_P(Scenes, ERPTTimeBudget, ::testing::Values("cornell-box"
                          [](const auto &info) { return gtestName(info.param); });
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " " << mutationName(c.type); }
     std::string scene;
     MutationType type;
 };

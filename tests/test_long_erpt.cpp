@@ -38,7 +38,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, LongERPTConvergence,
 
 struct Case {
     // Names the case in gtest output instead of dumping its bytes.
-    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " mutation " << static_cast<int>(c.type); }
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene << " " << mutationName(c.type); }
     std::string scene;
     MutationType type;
 };

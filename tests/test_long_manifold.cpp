@@ -13,6 +13,8 @@ namespace pf::test {
 namespace {
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int budget;
     int maxDepth = 0;  // longest paths (0: the scene's)

@@ -17,6 +17,8 @@ namespace pf::test {
 namespace {
 
 struct Case {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const Case &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int budget;        // seeds per pixel (mept) or mutations per pixel (memlt)
     int res = 16;      // image size

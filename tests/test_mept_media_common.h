@@ -11,6 +11,8 @@
 namespace pf::test {
 
 struct MediaCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const MediaCase &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int maxDepth;   // longest paths of chains and reference
     int block = 8;  // block size (16 at 16 x 16: the whole image, for a scene too noisy for smaller ones)

@@ -280,6 +280,8 @@ TEST(PortalStationarity, CrossingAngleKeepsTheTarget) {
 // mlt with the portal perturbation (the paper's mixture) agrees with BDPT and with mlt without it: block means
 // over independent renders (test_long_portal: larger, longer paths, more renders).
 struct ConvergenceCase {
+    // Names the case in gtest output instead of dumping its bytes.
+    friend void PrintTo(const ConvergenceCase &c, std::ostream *os) { *os << c.scene; }
     std::string scene;
     int maxDepth, mutationsPerPixel, renders;
 };
