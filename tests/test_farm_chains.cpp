@@ -29,15 +29,18 @@ protected:
 struct Case {
     const char *integrator;
     const char *args;
+    uint64_t sparseSeedingSamples = 0;  // > 0: luminanceSamples below one per pixel (render/seeding.h)
 };
 
 // 80 x 80 pixels: two seeding tasks (4096 pixels each), a direct component of 4 samples per pixel in four
 // image tasks between the chain tasks of 16384 mutations. ERPT: the luminance pilot, the direct component, then
-// 8 rounds of burst passes (one seed sample per pixel and round).
+// 8 rounds of burst passes (one seed sample per pixel and round). mmlt seeds sparsely: 900 luminance samples make
+// runs of 7 pixels, cut at the end of each seeding task (586 + 330 runs), so a task's candidates stay in its pixels.
 const Case kCases[] = {
     {"pssmlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
     {"mlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
     {"erpt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4 -P chainLength=20 -P numChains=0.5"},
+    {"mmlt", "--spp 8 -P luminanceSamples=900 -P directSamples=4", 586 + 330},
 };
 
 TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
@@ -85,6 +88,8 @@ TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
             EXPECT_EQ(chain.seeding_samples(), 20000 + kPixels * 8);
             EXPECT_GT(chain.passes(), 0u);
             EXPECT_EQ(1 + 4 + chain.passes() * chain.tasks_per_pass(), static_cast<uint64_t>(job.tasks().total()));
+        } else if (c.sparseSeedingSamples > 0) {
+            EXPECT_EQ(chain.seeding_samples(), c.sparseSeedingSamples);
         } else {
             EXPECT_EQ(chain.seeding_samples(), kPixels * static_cast<uint64_t>(chain.seeding_samples_per_pixel()));
         }

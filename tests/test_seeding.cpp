@@ -160,10 +160,11 @@ TEST_P(Seeding, ChainsStartOnTheirCandidates) {
 INSTANTIATE_TEST_SUITE_P(Scenes, Seeding, ::testing::Values("cornell-box", "veach-mis", "veach-bidir"));
 
 // Sparse seeding (luminanceSamples below one per pixel, render/seeding.h): one pixel of each run of
-// pixelStride is seeded, weighted by the run's length. At 96² (three seeding tasks of 4096 pixels) a stride
-// of 7 makes runs straddle the tasks: every run must be seeded exactly once, by one pixel, and b̂'s mean over
-// seeds must agree with dense seeding's (one sample in every pixel). Dropping the length factor would make
-// b̂ 7 times too small; picking a pixel other than uniformly would bias it where the image varies.
+// pixelStride is seeded, weighted by the run's length. At 96² (seeding tasks of 4096, 4096 and 1024 pixels) a
+// stride of 7 leaves each task a shorter last run: every run must be seeded exactly once, by one pixel of its
+// own task (the master refuses candidates outside a task), and b̂'s mean over seeds must agree with dense
+// seeding's (one sample in every pixel). Dropping the length factor would make b̂ 7 times too small; picking a
+// pixel other than uniformly would bias it where the image varies.
 TEST(SparseSeeding, OnePixelPerRunAndUnbiasedLuminance) {
     constexpr int kRes = 96, kSeeds = 16;
     constexpr uint64_t kPixels = kRes * kRes, kStride = 7;
@@ -176,17 +177,21 @@ TEST(SparseSeeding, OnePixelPerRunAndUnbiasedLuminance) {
     SeedingConfig dense = sparse;
     dense.pixelStride = 1;
 
-    uint64_t samples = 0;
+    uint64_t samples = 0, expected = 0;
     std::map<uint64_t, uint64_t> pixelOfRun;  // the full film is the crop window: record pixel = crop index
     for (const SeedingTask &t : seedingTasks(*scene)) {
         const SeedingResult r = runSeedingTask(*scene, sparse, kSeed, t);
         samples += r.samples;
         for (const SeedCandidate &c : r.candidates) {
-            const auto [it, fresh] = pixelOfRun.emplace(c.record.pixel / kStride, c.record.pixel);
+            ASSERT_GE(c.record.pixel, t.firstPixel);
+            ASSERT_LT(c.record.pixel, t.firstPixel + t.pixelCount);
+            const uint64_t run = t.firstPixel + (c.record.pixel - t.firstPixel) / kStride * kStride;
+            const auto [it, fresh] = pixelOfRun.emplace(run, c.record.pixel);
             EXPECT_TRUE(fresh || it->second == c.record.pixel) << "run " << it->first << " seeded twice";
         }
+        expected += (t.pixelCount + kStride - 1) / kStride;
     }
-    EXPECT_EQ(samples, (kPixels + kStride - 1) / kStride);
+    EXPECT_EQ(samples, expected);
     EXPECT_GT(pixelOfRun.size(), samples / 4) << "too few runs hold a path to have tested anything";
 
     std::vector<double> sum(2, 0.0), sum2(2, 0.0), mean, error;

@@ -82,7 +82,6 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
     const auto start = std::chrono::steady_clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
     const Film &film = scene.sensor().film();
-    const uint64_t pixels = static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
     const uint64_t end = task.firstPixel + task.pixelCount, stride = std::max<uint64_t>(1, config.pixelStride);
     const double perSample = 1.0 / static_cast<double>(config.samplesPerPixel);
     SeedingResult result;
@@ -94,10 +93,11 @@ SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, ui
             for (int64_t k = 0; k < config.samplesPerPixel; ++k)
                 firstStageSample(scene, config, seed, filmPixel(film, i), static_cast<uint64_t>(k), perSample, result);
     }
-    // The runs that start in this task's pixels, so every run belongs to exactly one task.
+    // Runs are cut at the task's ends, so a task's candidates lie in its own pixels, in order (the master
+    // checks that of every seeding result), and the split of the image into runs is the same on every machine.
     uint64_t runs = 0;
-    for (uint64_t run = (task.firstPixel + stride - 1) / stride * stride; run < end; run += stride, ++runs) {
-        const uint64_t length = std::min(stride, pixels - run);
+    for (uint64_t run = task.firstPixel; run < end; run += stride, ++runs) {
+        const uint64_t length = std::min(stride, end - run);
         const uint64_t pixel = filmPixel(film, seedPixelOfRun(seed, run, length));
         for (int64_t k = 0; k < config.samplesPerPixel; ++k)
             seedSample(scene, config, seed, pixel, static_cast<uint64_t>(k), perSample * static_cast<double>(length),

@@ -35,8 +35,8 @@ struct SeedingConfig {
     int minDepth = 1;
     // Two-stage MLT (render/two_stage.h): the first stage's size reduction; 0: one stage.
     int firstStageReduction = 0;
-    // Sparse seeding, for budgets of fewer samples than pixels (Mitsuba's luminanceSamples at 1024²): the crop
-    // window's pixels, row-major, fall into runs of pixelStride (the last one shorter); one pixel drawn
+    // Sparse seeding, for budgets of fewer samples than pixels (Mitsuba's luminanceSamples at 1024²): each
+    // seeding task's pixels, row-major, fall into runs of pixelStride (the last one shorter); one pixel drawn
     // uniformly from each run takes the samples and stands for its run, its weights multiplied by the run's
     // length, so b̂ stays unbiased (E[length * L(pick)] = sum of the run's L). 1: every pixel.
     uint64_t pixelStride = 1;
