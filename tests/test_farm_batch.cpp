@@ -16,6 +16,7 @@
 #include "integrators/integrator.h"
 #include "render/image_task.h"
 #include "scene/scene.h"
+#include "support/process.h"
 
 namespace pf::test::farm {
 namespace {
@@ -98,6 +99,17 @@ struct Job {
     std::string scene, reference;
     int64_t id = -1;
 };
+
+// A batch size outside 1..64 is refused at start-up with an error naming the flag, before the worker
+// connects anywhere.
+TEST(WorkerBatchFlag, OutOfRangeIsRefusedNamingTheFlag) {
+    for (const std::string bad : {"0", "65", "x"}) {
+        const ProcessResult r = runCommand(std::string(PATHFARM_WORKER_BIN) +
+                                           " --master 127.0.0.1:1 --token-file /dev/null --batch " + bad + " 2>&1");
+        EXPECT_NE(r.exitCode, 0) << bad;
+        EXPECT_NE(r.output.find("--batch"), std::string::npos) << r.output;
+    }
+}
 
 TEST_F(FarmTest, ABatchingWorkerRendersTheEmbeddedImageUpToRounding) {
     farm->startMaster();

@@ -15,6 +15,15 @@ namespace {
 // farm can spread seeding over its workers.
 constexpr uint64_t kPixelsPerSeedingTask = 4096;
 
+// Sparse seeding's pick: the crop index of the pixel that stands for the run of `runLength` pixels from crop
+// index `runStart` (uniform over the run, a pure function of the job seed and the run).
+uint64_t seedPixelOfRun(uint64_t seed, uint64_t runStart, uint64_t runLength) {
+    if (runLength <= 1) return runStart;
+    // A stream no render draws from (sample index 2^64 - 1), so the choice is independent of the samples.
+    IndependentSampler sampler(seed, runStart, ~uint64_t{0});
+    return runStart + std::min(runLength - 1, static_cast<uint64_t>(sampler.next1D() * static_cast<double>(runLength)));
+}
+
 }  // namespace
 
 uint64_t filmPixel(const Film &film, uint64_t cropIndex) {
@@ -68,13 +77,6 @@ void spreadLuminanceSamples(SeedingConfig &config, const Film &film, int64_t lum
     const int64_t samples = std::max<int64_t>(1, luminanceSamples);
     config.samplesPerPixel = std::max<int64_t>(1, (samples + pixels - 1) / pixels);
     config.pixelStride = samples < pixels ? static_cast<uint64_t>(pixels / samples) : 1;
-}
-
-uint64_t seedPixelOfRun(uint64_t seed, uint64_t runStart, uint64_t runLength) {
-    if (runLength <= 1) return runStart;
-    // A stream no render draws from (sample index 2^64 - 1), so the choice is independent of the samples.
-    IndependentSampler sampler(seed, runStart, ~uint64_t{0});
-    return runStart + std::min(runLength - 1, static_cast<uint64_t>(sampler.next1D() * static_cast<double>(runLength)));
 }
 
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task) {

@@ -83,9 +83,6 @@ void forEachSeedStrategy(const Scene &scene, const SeedingConfig &config, uint64
 // window: whole samples per pixel, or, below one per pixel, one sample per run of pixels (sparse seeding;
 // Mitsuba's default 100000 at 1024² is a tenth of a sample per pixel).
 void spreadLuminanceSamples(SeedingConfig &config, const Film &film, int64_t luminanceSamples);
-// Sparse seeding's pick: the crop index of the pixel that stands for the run of `runLength` pixels from crop
-// index `runStart` (uniform over the run, a pure function of the job seed and the run).
-uint64_t seedPixelOfRun(uint64_t seed, uint64_t runStart, uint64_t runLength);
 // The film pixel index (PathRecord::pixel) of crop-window pixel `cropIndex`.
 uint64_t filmPixel(const Film &film, uint64_t cropIndex);
 // The raster position of a pixel sample, drawn from `sampler` as the render loop draws it (two numbers,
