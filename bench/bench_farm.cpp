@@ -2,7 +2,7 @@
 // passes or fails on time.
 //
 //   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
-//              [--fake-batch N[,N...]] [--task-seconds S]
+//              [--fake-batch N|auto[,...]] [--task-seconds S]
 //   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res,
 //   batches of 1)
 //
@@ -20,8 +20,9 @@
 //    part 1 checks bits). Printed: the master's CPU per idle worker and second (no job), then under a
 //    saturating task rate its CPU per task, the tasks per second it sustains, the bytes per task on the
 //    wire, and the 8-core workers that implies (their task time from part 1). With --fake-batch N the
-//    fake workers lease N tasks at once and return them as one result (pathfarm-worker --batch N); a
-//    list of sizes runs part 4 once per size, each with a fresh master. --task-seconds S: also the 8-core
+//    fake workers lease N tasks at once and return them as one result (pathfarm-worker --batch N; auto
+//    leaves the size to the master, as pathfarm-worker does by default); a list of sizes runs part 4 once
+//    per size, each with a fresh master. --task-seconds S: also the 8-core
 //    workers one master keeps busy at tasks of S seconds (e.g. part 1's smallest task, under --fake-only).
 #include <unistd.h>
 
@@ -133,6 +134,7 @@ public:
             if (reply.has_task()) {
                 complete(reply);
                 tasks_ += 1 + reply.more_size();
+                ++returned_;
             } else if (done) {
                 return;
             }
@@ -147,6 +149,7 @@ public:
         }
     }
     int64_t tasks() const { return tasks_; }
+    int64_t returned() const { return returned_; }
     uint64_t bytes() const { return bytes_; }
 
 private:
@@ -194,7 +197,7 @@ private:
     std::unique_ptr<v1::WorkerService::Stub> stub_;
     std::string id_;
     std::chrono::milliseconds heartbeat_{3000};
-    int64_t tasks_ = 0;
+    int64_t tasks_ = 0, returned_ = 0;
     uint64_t bytes_ = 0;
 };
 
@@ -248,10 +251,19 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
         std::exit(1);
     }
     uint64_t bytes = 0;
-    for (const auto &f : fakes) bytes += f->bytes();
+    int64_t leased = 0, returned = 0;
+    for (const auto &f : fakes) {
+        bytes += f->bytes();
+        leased += f->tasks();
+        returned += f->returned();
+    }
     const double n = static_cast<double>(job.tasks().merged());
-    std::printf("saturation: %d fake workers, batches of %d, %lld tasks of %dx%d (%lld spp) in %.2f s\n", workers,
-                batch, static_cast<long long>(job.tasks().merged()), res, res, static_cast<long long>(spp), wall);
+    std::printf(
+        "saturation: %d fake workers, batches of %s (%.1f tasks per result), %lld tasks of %dx%d (%lld spp) "
+        "in %.2f s\n",
+        workers, batch == farm::kAutoBatch ? "auto" : std::to_string(batch).c_str(),
+        static_cast<double>(leased) / static_cast<double>(std::max<int64_t>(1, returned)),
+        static_cast<long long>(job.tasks().merged()), res, res, static_cast<long long>(spp), wall);
     std::printf("  master CPU:                %8.3f ms per task\n", 1e3 * cpu / n);
     std::printf("  tasks per second:          %8.1f  (master CPU %.0f%% of one core; the machine may be shared)\n",
                 n / wall, 100 * cpu / wall);
@@ -389,7 +401,8 @@ int main(int argc, char **argv) {
         } else if (a == "--fake-batch" && value) {
             batches.clear();
             std::stringstream list(argv[++i]);
-            for (std::string n; std::getline(list, n, ',');) batches.push_back(std::stoi(n));
+            for (std::string n; std::getline(list, n, ',');)
+                batches.push_back(n == "auto" ? farm::kAutoBatch : std::stoi(n));
         } else if (a == "--task-seconds" && value) {
             taskSeconds = std::stod(argv[++i]);
         } else if (a == "--fake-only") {

@@ -20,7 +20,7 @@ namespace {
 struct Args {
     std::string listen = "127.0.0.1:7700", http, data = "pathfarm-data", tokenFile, workerTokenFile, logLevel = "info";
     pf::farm::TlsFiles tls;
-    int64_t leaseMs = 10000, heartbeatMs = 3000, checkpointMs = 10000;
+    int64_t leaseMs = 10000, heartbeatMs = 3000, checkpointMs = 10000, batchWindowMs = 1000;
     int maxMessageMiB = 4;
     int64_t maxBundleMiB = 2048;
 };
@@ -119,6 +119,14 @@ int main(int argc, char **argv) {
     app.add_option("--max-failures-per-task", cfg.maxFailuresPerTask, "Failed attempts of one task that fail its job")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
+    app.add_option("--batch-busy", cfg.batchBusyShare,
+                   "Workers with --batch auto get batches of tasks while taking results uses more than this "
+                   "share of one master core")
+        ->check(CLI::Range(0.0, 64.0))
+        ->capture_default_str();
+    app.add_option("--batch-window-ms", a.batchWindowMs, "How often the batch for --batch auto workers may change")
+        ->check(CLI::Range(10, 60000))
+        ->capture_default_str();
     app.add_option("--log-level", a.logLevel, "trace, debug, info, warn, error")->capture_default_str();
     try {
         app.parse(argc, argv);
@@ -129,6 +137,7 @@ int main(int argc, char **argv) {
     cfg.leaseTime = std::chrono::milliseconds(a.leaseMs);
     cfg.heartbeat = std::chrono::milliseconds(a.heartbeatMs);
     cfg.checkpointInterval = std::chrono::milliseconds(a.checkpointMs);
+    cfg.batchWindow = std::chrono::milliseconds(a.batchWindowMs);
     cfg.maxMessageBytes = a.maxMessageMiB << 20;
     cfg.maxBundleBytes = static_cast<uint64_t>(a.maxBundleMiB) << 20;
     try {

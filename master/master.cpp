@@ -18,7 +18,8 @@ Master::Master(MasterConfig config)
       bundles_((fs::create_directories(cfg_.dataDir), checkWritable(cfg_.dataDir),
                 (fs::path(cfg_.dataDir) / "bundles").string()),
                cfg_.maxBundleBytes),
-      store_((fs::path(cfg_.dataDir) / "store.sqlite").string()) {
+      store_((fs::path(cfg_.dataDir) / "store.sqlite").string()),
+      batchGovernor_(cfg_.batchBusyShare, cfg_.batchWindow, kMaxBatchTasks) {
     recover();
     reaper_ = std::thread([this] { reaperLoop(); });
 }
@@ -85,6 +86,7 @@ std::vector<v1::WorkerInfo> Master::workers() const {
 MasterMetrics Master::metrics() const {
     const std::lock_guard<std::mutex> lock(mu_);
     MasterMetrics m = counters_;
+    m.batchTasks = batchGovernor_.batch();
     for (const char *s : {task_state::kPending, task_state::kLeased, task_state::kAccepted, task_state::kMerged})
         m.tasksByState[s] = 0;
     for (const auto &[id, j] : jobs_) {

@@ -33,6 +33,7 @@
 #include <variant>
 #include <vector>
 
+#include "batch_governor.h"
 #include "farm/bundle.h"
 #include "image/bitmap.h"
 #include "image/film.h"
@@ -59,6 +60,10 @@ struct MasterConfig {
     double maxTimeSeconds = 7 * 24 * 3600.0;
     uint64_t maxBundleBytes = uint64_t(2) << 30;
     int maxMessageBytes = 4 << 20;  // gRPC messages in either direction
+    // Batches for workers that leave their size to the master (batch_governor.h): they grow while taking
+    // results uses more than this share of one master core, measured over windows of batchWindow.
+    double batchBusyShare = 0.5;
+    std::chrono::milliseconds batchWindow{1000};
 };
 
 // Figures for status pages and /metrics.
@@ -75,6 +80,7 @@ struct MasterMetrics {
     int64_t lateResultsIgnored = 0;
     int64_t resultsLost = 0;  // stored results unreadable or failing their checksum, rendered again
     int64_t attemptsExpired = 0, attemptsFailed = 0;
+    int batchTasks = 1;  // the batch a worker with `--batch auto` gets now
 };
 
 // Thrown for requests naming a worker the master does not know (the worker registers again).
@@ -125,7 +131,8 @@ public:
     static constexpr int kMaxBatchTasks = 64;
     // A task for this worker, waiting up to `wait` for one; empty when there is none (or the worker
     // drains). With maxTasks > 1, the image tasks that follow it in its job too (up to maxTasks, capped at
-    // kMaxBatchTasks, as many as can be leased now), for a batched result. Throws UnknownWorker.
+    // kMaxBatchTasks, as many as can be leased now), for a batched result; with farm::kAutoBatch, up to
+    // the governor's batch. Throws UnknownWorker.
     std::vector<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait,
                                               int maxTasks = 1);
     // Renews the worker's leases; returns the attempts it no longer holds. Throws UnknownWorker.
@@ -252,6 +259,7 @@ private:
     std::map<int64_t, Lease> leases_;  // by attempt id
     std::map<std::string, std::unique_ptr<WorkerRuntime>> workers_;
     MasterMetrics counters_;
+    mutable BatchGovernor batchGovernor_;
     // Samples merged per second (seconds since the steady clock's epoch), over the last minute.
     std::deque<std::pair<int64_t, uint64_t>> recentSamples_;
 

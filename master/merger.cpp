@@ -42,6 +42,7 @@ uint64_t Master::maxPayloadBytes(int64_t attempt) const {
 
 v1::CompleteReply Master::complete(const std::string &worker, const std::vector<int64_t> &attempts,
                                    const v1::TaskStats &stats, const std::string &payload) {
+    const BatchGovernor::Meter meter(batchGovernor_);
     for (const int64_t a : attempts)
         if (const std::string reason = checkAttempt(worker, a); !reason.empty()) return ignoreResult(worker, a, reason);
     const int64_t attempt = attempts.front();

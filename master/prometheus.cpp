@@ -86,6 +86,10 @@ void farmWide(Exposition &e, const MasterMetrics &m, const std::vector<v1::Job> 
     e.family("pathfarm_merge_seconds", "summary", "Time spent decoding and merging task results, per result.");
     e.sample("pathfarm_merge_seconds_sum", {}, m.mergeSeconds);
     e.sample("pathfarm_merge_seconds_count", {}, static_cast<double>(m.resultsMerged));
+    e.family("pathfarm_batch_tasks", "gauge",
+             "Image tasks a worker with --batch auto leases at once now (grows while taking results keeps the "
+             "master busy).");
+    e.sample("pathfarm_batch_tasks", {}, m.batchTasks);
     e.family("pathfarm_result_bytes_total", "counter", "Bytes of accepted result payloads.");
     e.sample("pathfarm_result_bytes_total", {}, static_cast<double>(m.resultBytes));
     e.family("pathfarm_late_results_ignored_total", "counter", "Results of superseded attempts that were ignored.");

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "farm/convert.h"
+#include "farm/rpc.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -80,7 +81,8 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
             // A batch (merged by the worker, so that the master decodes and merges it once) holds image
             // tasks in a row: the master merges in task order, and a chain job's tasks merge by kind.
             JobRuntime &j = *jobs_.at(tasks.front().job_id());
-            const auto most = static_cast<size_t>(std::clamp(maxTasks, 1, kMaxBatchTasks));
+            const auto most = static_cast<size_t>(
+                maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : std::clamp(maxTasks, 1, kMaxBatchTasks));
             std::vector<int64_t> following;
             for (int64_t want = tasks.front().task_index() + 1;
                  !j.chain && 1 + following.size() < most && batchMayGrow(j, 1 + following.size()); ++want) {

@@ -9,6 +9,7 @@
 
 #include <cmath>
 
+#include "batch_governor.h"
 #include "farm/block_codec.h"
 #include "farm/fake_worker.h"
 #include "farm/harness.h"
@@ -100,7 +101,7 @@ struct Job {
     int64_t id = -1;
 };
 
-// A batch size outside 1..64 is refused at start-up with an error naming the flag, before the worker
+// A batch size other than auto or 1..64 is refused at start-up with an error naming the flag, before the worker
 // connects anywhere.
 TEST(WorkerBatchFlag, OutOfRangeIsRefusedNamingTheFlag) {
     for (const std::string bad : {"0", "65", "x"}) {
@@ -109,6 +110,57 @@ TEST(WorkerBatchFlag, OutOfRangeIsRefusedNamingTheFlag) {
         EXPECT_NE(r.exitCode, 0) << bad;
         EXPECT_NE(r.output.find("--batch"), std::string::npos) << r.output;
     }
+}
+
+// The governor (master/batch_governor.h) on a clock of its own: the batch doubles after each window in which
+// taking results used more than the busy share of a core, halves after one below a fifth of it, and stays
+// between 1 and its most.
+TEST(BatchGovernor, GrowsWhileBusyAndShrinksWhenIdle) {
+    using namespace std::chrono;
+    master::BatchGovernor g(0.5, 1000ms, 8);
+    auto now = master::BatchGovernor::Clock::now();
+    EXPECT_EQ(g.batch(now), 1);
+    const std::vector<std::pair<double, int>> windows = {{0.8, 2}, {0.6, 4},  {0.45, 4}, {0.7, 8}, {0.9, 8},
+                                                         {0.2, 8}, {0.05, 4}, {0.09, 2}, {0.0, 1}, {0.0, 1}};
+    for (const auto &[cpu, expected] : windows) {
+        // Spread over the window: what counts is its sum.
+        for (int i = 0; i < 4; ++i) g.record(cpu / 4, now + milliseconds(250 * i));
+        now += 1000ms;
+        EXPECT_EQ(g.batch(now), expected) << "after a window with " << cpu << " CPU s";
+    }
+}
+
+// A worker that leaves the batch to the master (the default) gets one task per lease from an idle master,
+// so the farm's image equals the embedded render bit for bit.
+TEST_F(FarmTest, AnIdleMasterLeasesOneTaskToAutoBatchWorkers) {
+    farm->startMaster();
+    const Job job(*farm, 24);
+    farm->startWorker(2);
+    const std::string out = job.fetch(*farm);
+    EXPECT_EQ(expectEqualUpToRounding(job.reference, out), 0);
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0"), 0);
+}
+
+// A master whose busy share is 0 grows its batches after every window of 50 ms: a default worker then
+// returns batched results, merged once each and equal to the embedded render up to rounding.
+TEST_F(FarmTest, ABusyMasterBatchesAutoBatchWorkers) {
+    farm->startMaster({"--batch-busy", "0", "--batch-window-ms", "50"});
+    const Job job(*farm, 24);
+    const std::string scene2 = writeTestScene(farm->dir() + "/scene2", 24, 8 * kSpp);
+    const auto [code, output] = farm->cli("submit " + scene2 + " --spp 512 --seed 3");
+    ASSERT_EQ(code, 0) << output;
+    const int64_t second = jobIdFrom(output);
+    farm->startWorker(2);
+    const std::string out = job.fetch(*farm);
+    expectEqualUpToRounding(job.reference, out);
+    expectMergedOnce(*farm, job.id, kSpp / 8);
+    const v1::Job done = farm->waitForJob(second, 60s);
+    EXPECT_EQ(done.state(), v1::JOB_DONE);
+    expectMergedOnce(*farm, second, done.tasks().merged());
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM tasks WHERE job_id = " + std::to_string(second)),
+              done.tasks().merged());
+    EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0"), 0);
 }
 
 TEST_F(FarmTest, ABatchingWorkerRendersTheEmbeddedImageUpToRounding) {

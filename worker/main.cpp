@@ -37,10 +37,13 @@ int main(int argc, char **argv) {
     app.add_option("--health-listen", healthListen, "Address of this worker's gRPC health service (port 0: any)")
         ->capture_default_str();
     app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
-    app.add_option("--batch", cfg.batch,
-                   "Image tasks leased at once and returned as one result (less master CPU per task; "
-                   "default 1, the only size whose image equals the embedded render bit for bit)")
-        ->check(CLI::Range(1, 64));
+    std::string batch = "auto";
+    app.add_option("--batch", batch,
+                   "Image tasks leased at once and returned as one result (less master CPU per task): 1..64, or "
+                   "auto, where the master batches only while taking results keeps it busy. Only batches of one "
+                   "give an image equal to the embedded render bit for bit")
+        ->check(CLI::IsMember({"auto"}) | CLI::Range(1, 64))
+        ->capture_default_str();
     app.add_flag("--fail-every-task", cfg.failEveryTask, "Test-only fault injection: fail every leased task")
         ->group("");
     try {
@@ -48,6 +51,7 @@ int main(int argc, char **argv) {
     } catch (const CLI::ParseError &e) {
         return app.exit(e);
     }
+    cfg.batch = batch == "auto" ? pf::farm::kAutoBatch : std::stoi(batch);
     pf::farm::setupLogging("worker", logLevel);
 
     sigset_t stopSignals;

@@ -36,7 +36,8 @@ struct WorkerConfig {
     // Image tasks leased at once and returned as one result (merged here in task order), so that the
     // master decodes and merges one film for all of them. 1: a result per task, whose merge on the master
     // reproduces the embedded render bit for bit; a batch's sum rounds differently (in the last bits).
-    int batch = 1;
+    // farm::kAutoBatch: as many as the master chooses, which batches only while results keep it busy.
+    int batch = farm::kAutoBatch;
     int maxMessageBytes = 4 << 20;  // until the master says otherwise
     // Test-only fault injection: report every leased task as failed without rendering it.
     bool failEveryTask = false;

@@ -11,6 +11,9 @@ namespace pf::farm {
 // Reported by workers at registration and by `pathfarm health`.
 inline constexpr const char *kVersion = "0.1.0";
 
+// LeaseRequest.max_tasks of a worker that leaves its batch size to the master (master/batch_governor.h).
+inline constexpr int kAutoBatch = -1;
+
 // PEM files. A server uses TLS when cert and key are given and then requires client certificates
 // signed by `ca` when that is given too (mTLS). A client uses TLS when `ca` (the roots it trusts) is
 // given, presenting cert and key when those are given.
