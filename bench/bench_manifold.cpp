@@ -3,7 +3,8 @@
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
 //   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
-//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia] [--table1 0|1] [--references DIR]
+//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia,mept-nodistance] [--table1 0|1]
+//                  [--references DIR]
 //                  [--glossy-angle D] (manifoldGlossyAngle of mept and memlt in degrees, default 1)
 //                  [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
@@ -84,13 +85,15 @@ struct Params {
     double glossyAngle = 1;  // manifoldGlossyAngle of mept and memlt, in degrees
 };
 
-// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes.
-bool isBurst(const std::string &type) { return type == "erpt" || type == "mept" || type == "mept-nomedia"; }
+// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes;
+// "mept-nodistance" mept without the medium-distance perturbation (mediumDistancePerturbation = false).
+bool isBurst(const std::string &type) { return type == "erpt" || type.starts_with("mept"); }
 
 std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &method, const Params &p) {
-    const std::string type = method == "mept-nomedia" ? "mept" : method;
+    const std::string type = method.starts_with("mept-") ? "mept" : method;
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
-    if (method != type) props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
+    if (method == "mept-nomedia") props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
+    if (method == "mept-nodistance") props.set("mediumDistancePerturbation", pf::Properties::Type::Boolean, false, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
     // lambda 0: "auto" (the pilot tunes it; mept only, memlt keeps its default).
