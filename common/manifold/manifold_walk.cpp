@@ -69,8 +69,8 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
     for (size_t i = 1; i + 1 < k; ++i) {
         const ManifoldVertex &old = chain[i];
         if (old.type == ManifoldVertexType::Medium) {
-            // [TR §7.1]: x'_i = x_{i-1} + |x_{i-1} - x_i| d, in the same medium (no surface on the way), then the
-            // offset becomes the outgoing direction in the frame of the new incoming one.
+            // [TR §7.1]: x'_i = x_{i-1} + |x_{i-1} - x_i| d, with no surface on the way but index-matched ones, then
+            // the offset becomes the outgoing direction in the frame of the new incoming one.
             Intersection blocker;
             if (intersectOpaque(scene_, Ray(rayOrigin, dir, scene_.epsilonAt(rayOrigin), old.segment), blocker))
                 return std::nullopt;
