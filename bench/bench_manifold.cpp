@@ -3,7 +3,9 @@
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
 //   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
-//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia] [--table1 0|1] [--references DIR]
+//                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia,mept-nodistance] [--table1 0|1]
+//                  [--references DIR]
+//                  [--glossy-angle D] (manifoldGlossyAngle of mept and memlt in degrees, default 1)
 //                  [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
 //   bench_manifold --sweep-lambda L1,.. [--sweep-length M1,..] [--sweep-seeds N1,..] [same options] [scene ...]
@@ -67,7 +69,7 @@ struct Options {
     bool table1 = true;
     int threads = 1;
     int64_t chainLength = 1000;
-    double seconds = 8, lambda = 50;
+    double seconds = 8, lambda = 50, glossyAngle = 1;
     std::vector<double> sweepLambdas;
     std::vector<int64_t> sweepLengths, sweepSeeds;
     std::vector<std::string> scenes, methods = {"bdpt", "memlt", "erpt", "mept"};
@@ -80,21 +82,26 @@ struct Options {
 struct Params {
     double lambda = 100, numChains = 1;
     int64_t chainLength = 100, spp = 0;
+    double glossyAngle = 1;  // manifoldGlossyAngle of mept and memlt, in degrees
 };
 
-// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes.
-bool isBurst(const std::string &type) { return type == "erpt" || type == "mept" || type == "mept-nomedia"; }
+// "mept-nomedia" is mept without medium vertices in its chains (mediumChains = false), for the media scenes;
+// "mept-nodistance" mept without the medium-distance perturbation (mediumDistancePerturbation = false).
+bool isBurst(const std::string &type) { return type == "erpt" || type.starts_with("mept"); }
 
 std::unique_ptr<pf::Integrator> integrator(const pf::Scene &scene, const std::string &method, const Params &p) {
-    const std::string type = method == "mept-nomedia" ? "mept" : method;
+    const std::string type = method.starts_with("mept-") ? "mept" : method;
     pf::Properties props(pf::ObjectKind::Integrator, type, {});
-    if (method != type) props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
+    if (method == "mept-nomedia") props.set("mediumChains", pf::Properties::Type::Boolean, false, {});
+    if (method == "mept-nodistance") props.set("mediumDistancePerturbation", pf::Properties::Type::Boolean, false, {});
     const pf::Properties &file = scene.integratorProperties();
     if (file.has("maxDepth")) props.set("maxDepth", pf::Properties::Type::Integer, file.getInt("maxDepth"), {});
     // lambda 0: "auto" (the pilot tunes it; mept only, memlt keeps its default).
     if (type == "mept" && !(p.lambda > 0)) props.set("lambda", pf::Properties::Type::String, std::string("auto"), {});
     if ((type == "mept" || type == "memlt") && p.lambda > 0)
         props.set("lambda", pf::Properties::Type::Float, p.lambda, {});
+    if (type == "mept" || type == "memlt")
+        props.set("manifoldGlossyAngle", pf::Properties::Type::Float, p.glossyAngle, {});
     if (isBurst(type)) {
         props.set("chainLength", pf::Properties::Type::Integer, p.chainLength, {});
         props.set("numChains", pf::Properties::Type::Float, p.numChains, {});
@@ -139,21 +146,23 @@ pf::ChainImage chainsOnOneCore(const pf::Scene &scene, const pf::ChainIntegrator
 
 // Table 1's walk columns from a chain's counters: walks per mutation, converged %, mean Newton iterations,
 // mean and largest specular chain, reverse walks and non-reversible %, and the medium vertices that proposals
-// walked in chains per walk (§6.7).
+// walked in chains per walk (§6.7), and the converged walks whose chain crosses an index-matched boundary (%).
 std::string walkColumns(pf::ChainCounters counters, uint64_t proposed) {
     const auto value = [&](const char *name) { return pf::counter(counters, name).value; };
     const double walks = value("manifoldWalks"), reverse = value("manifoldReverseWalks");
     const double perWalk = walks > 0 ? 1 / walks : 0;
-    char line[180];
-    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%% %6.2f", walks,
-                  proposed ? walks / static_cast<double>(proposed) : 0.0,
-                  100 * value("manifoldWalksConverged") * perWalk, value("manifoldNewtonIterations") * perWalk,
-                  value("manifoldChainVertices") * perWalk, value("manifoldChainVerticesMax"), reverse,
+    const double converged = value("manifoldWalksConverged");
+    char line[200];
+    std::snprintf(line, sizeof line, "%10.0f %7.2f %8.1f%% %7.2f %6.2f %4.0f %9.0f %6.2f%% %6.2f %6.2f%%", walks,
+                  proposed ? walks / static_cast<double>(proposed) : 0.0, 100 * converged * perWalk,
+                  value("manifoldNewtonIterations") * perWalk, value("manifoldChainVertices") * perWalk,
+                  value("manifoldChainVerticesMax"), reverse,
                   reverse > 0 ? 100 * value("manifoldNonReversible") / reverse : 0.0,
-                  value("manifoldMediumVertices") * perWalk);
+                  value("manifoldMediumVertices") * perWalk,
+                  converged > 0 ? 100 * value("manifoldCrossingWalks") / converged : 0.0);
     return line;
 }
-const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev  media";
+const char *const kWalkHeader = "     walks walks/m converged  Newton   size  max   reverse  nonrev  media  cross";
 
 void printTable1(const std::string &label, const pf::ChainImage &image) {
     const uint64_t proposed = sumProposed(image.counts, false), accepted = sumProposed(image.counts, true);
@@ -169,7 +178,7 @@ void printTable1(const std::string &label, const pf::ChainImage &image) {
 void table1(const Options &o, const pf::Scene &scene) {
     std::printf("%-7s %11s %9s %s %11s\n", "method", "mutations", "accepted", kWalkHeader, "mutations/s");
     // MEPT: about 100 mutations per pixel, as bursts of chainLength.
-    const Params p{o.lambda, 100.0 / static_cast<double>(o.chainLength), o.chainLength, 0};
+    const Params p{o.lambda, 100.0 / static_cast<double>(o.chainLength), o.chainLength, 0, o.glossyAngle};
     for (const std::string type : {"mept", "memlt"}) {
         const auto method = integrator(scene, type, p);
         printTable1(type, chainsOnOneCore(scene, dynamic_cast<const pf::ChainIntegrator &>(*method),
@@ -367,7 +376,8 @@ void equalTimeTable(const Options &o, const std::string &path, const pf::Scene &
     const std::string stem = o.out.empty() ? "" : o.out + "/" + fs::path(path).parent_path().filename().string();
     if (!stem.empty()) pf::writeEXR(stem + "-reference.exr", ref.image);
     for (const std::string &type : o.methods) {
-        const Params p = budgetForTime(o, scene, type, {o.lambda, 1, o.chainLength, isBurst(type) ? o.seedSpp : 0});
+        const Params p =
+            budgetForTime(o, scene, type, {o.lambda, 1, o.chainLength, isBurst(type) ? o.seedSpp : 0, o.glossyAngle});
         pf::Bitmap image;
         const Summary s = equalTime(o, scene, type, p, ref, &image);
         std::printf("%-7s %s\n", type.c_str(), summaryColumns(s).c_str());
@@ -394,7 +404,7 @@ void lambdaSweep(const Options &o, const pf::Scene &scene, const Reference &ref)
     for (const int64_t seeds : orDefault(o.sweepSeeds, o.seedSpp))
         for (const int64_t length : orDefault(o.sweepLengths, o.chainLength))
             for (const double lambda : o.sweepLambdas) {
-                const Params p = budgetForTime(o, scene, "mept", {lambda, 1, length, seeds});
+                const Params p = budgetForTime(o, scene, "mept", {lambda, 1, length, seeds, o.glossyAngle});
                 const Summary s = equalTime(o, scene, "mept", p, ref, nullptr);
                 std::printf("%6lld %6g %6lld %9.3g %s %s\n", static_cast<long long>(seeds), lambda,
                             static_cast<long long>(length), p.numChains, summaryColumns(s).c_str(),
@@ -433,6 +443,7 @@ int main(int argc, char **argv) {
         {"--seed-spp", [&](const char *v) { o.seedSpp = std::stoi(v); }},
         {"--mpp", [&](const char *v) { o.mpp = std::stoi(v); }},
         {"--lambda", [&](const char *v) { o.lambda = std::string(v) == "auto" ? 0.0 : std::stod(v); }},
+        {"--glossy-angle", [&](const char *v) { o.glossyAngle = std::stod(v); }},
         {"--chain-length", [&](const char *v) { o.chainLength = std::stoll(v); }},
         {"--sweep-lambda", [&](const char *v) { o.sweepLambdas = parseList<double>(v, +toDouble); }},
         {"--sweep-length", [&](const char *v) { o.sweepLengths = parseList<int64_t>(v, +toInt); }},

@@ -6,7 +6,9 @@
 // to a surface constraint) against central finite differences; propagation with the chain's own direction
 // reproduces the chain; walks converge onto paths that keep every offset and segment length, and walk back; the
 // generalized geometry term through medium vertices (the dense system with the length rows) against the traced
-// finite-difference solid-angle/area ratio.
+// finite-difference solid-angle/area ratio. The walk and propagation checks run a second time with an
+// index-matched boundary (the null BSDF) across the sphere (glass_sphere_index_matched.xml), which chain
+// segments cross without bending: walks and propagation must pass straight through it (manifold_walk.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "bsdf/bsdf.h"
 #include "core/frame.h"
 #include "core/rng.h"
 #include "manifold/dense_system.h"
@@ -38,8 +41,24 @@ Vec3 randomUnit(PCG32 &rng) {
     }
 }
 
-std::unique_ptr<Scene> glassSphere() {
-    return loadScene(std::string(PATHFARM_SOURCE_DIR) + "/tests/scenes/manifold/glass_sphere.xml");
+const std::string kSphere = "glass_sphere.xml", kIndexMatched = "glass_sphere_index_matched.xml";
+
+std::unique_ptr<Scene> glassSphere(const std::string &file = kSphere) {
+    return loadScene(std::string(PATHFARM_SOURCE_DIR) + "/tests/scenes/manifold/" + file);
+}
+
+// The index-matched surfaces that the segments of a chain cross.
+int crossings(const Scene &scene, const std::vector<ManifoldVertex> &chain) {
+    int count = 0;
+    for (size_t i = 0; i + 1 < chain.size(); ++i) {
+        Ray ray = scene.spawnRayTo(chain[i].p, chain[i + 1].p);
+        Intersection its;
+        while (scene.intersect(ray, its) && its.bsdf()->isNull()) {
+            ++count;
+            ray.tmin = its.t + scene.epsilonAt(its.p);
+        }
+    }
+    return count;
 }
 
 // A vertex with a flat chart around a random normal at p (a neighbour whose own constraint is not evaluated).
@@ -146,21 +165,24 @@ std::optional<Vec3> refract(const Vec3 &d, const Vec3 &n) {
 // internal reflection).
 std::vector<ManifoldVertex> mediumChain(const Scene &scene, const Vec3 &x1, const Vec3 &d, int media, PCG32 &rng) {
     Intersection entry, exit, floor;
-    if (!scene.intersect(Ray(x1, d), entry)) return {};
+    const auto intersect = [&](const Vec3 &o, const Vec3 &dir, Intersection &its) {
+        return intersectOpaque(scene, Ray(o, dir, scene.epsilonAt(o)), its);
+    };
+    if (!intersect(x1, d, entry)) return {};
     std::optional<Vec3> dir = refract(d, entry.n);
     if (!dir) return {};
     std::vector<Vec3> points = {x1, entry.p};
     for (int m = 0; m < media; ++m) {
         const Vec3 &from = points.back();
-        if (!scene.intersect(Ray(from, *dir, scene.epsilonAt(from)), exit)) return {};
+        if (!intersect(from, *dir, exit)) return {};
         points.push_back(from + *dir * ((exit.p - from).length() * uniform(rng, 0.2, 0.6)));
         const Frame f(*dir);
         const double theta = uniform(rng, 0, 20) * kPi / 180, phi = uniform(rng, 0, 2 * kPi);
         dir = f.toWorld(Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
     }
-    if (!scene.intersect(Ray(points.back(), *dir, scene.epsilonAt(points.back())), exit)) return {};
+    if (!intersect(points.back(), *dir, exit)) return {};
     dir = refract(*dir, exit.n);
-    if (!dir || !scene.intersect(Ray(exit.p, *dir, scene.epsilonAt(exit.p)), floor)) return {};
+    if (!dir || !intersect(exit.p, *dir, floor)) return {};
     if (exit.shape != entry.shape || floor.shape == entry.shape) return {};
     points.push_back(exit.p);
     points.push_back(floor.p);
@@ -199,17 +221,31 @@ void expectOnManifold(const std::vector<ManifoldVertex> &chain, const std::vecto
     }
 }
 
-TEST(ManifoldMedium, WalksThroughMediumVerticesConvergeAndReturn) {
-    const auto scene = glassSphere();
+// The walk and propagation checks on the sphere, and with the index-matched boundary across it, where they count
+// the chains that cross it (at least 10 must).
+class ManifoldMediumScenes : public ::testing::TestWithParam<std::string> {
+protected:
+    void expectCrossings(int crossing) const {
+        if (GetParam() == kIndexMatched) {
+            EXPECT_GE(crossing, 10) << "too few chains cross the boundary";
+        }
+    }
+};
+
+// Walks from random chains to targets near their ends converge and walk back.
+TEST_P(ManifoldMediumScenes, WalksThroughMediumVerticesConvergeAndReturn) {
+    const std::string &file = GetParam();
+    const auto scene = glassSphere(file);
     ManifoldWalkParameters params;
     params.epsilon = 1e-12;
     const ManifoldWalk walker(*scene, params);
     PCG32 rng(11, 5);
-    int converged = 0, iterations = 0;
+    int converged = 0, iterations = 0, crossing = 0;
     constexpr int kTrials = 40;
     for (int trial = 0; trial < kTrials; ++trial) {
         Vec3 x1, d;
         const std::vector<ManifoldVertex> chain = randomChain(*scene, rng, x1, d);
+        const bool crosses = crossings(*scene, chain) > 0;
         const Vec3 end = chain.back().p;
         Intersection its;
         ASSERT_TRUE(scene->intersect(
@@ -218,6 +254,7 @@ TEST(ManifoldMedium, WalksThroughMediumVerticesConvergeAndReturn) {
         const WalkResult result = walker.walk(chain, *ManifoldVertex::surface(its));
         if (!result.converged()) continue;
         ++converged;
+        crossing += crosses;
         iterations += result.stats.iterations;
         EXPECT_LT((result.chain.back().p - its.p).length(), 1e-12);
         expectOnManifold(result.chain, chain);
@@ -227,22 +264,28 @@ TEST(ManifoldMedium, WalksThroughMediumVerticesConvergeAndReturn) {
         for (size_t i = 1; i + 1 < chain.size(); ++i)
             EXPECT_LT((back.chain[i].p - chain[i].p).length(), 1e-6) << "vertex " << i;
     }
-    std::printf("walks: %d of %d converged, %d iterations\n", converged, kTrials, iterations);
+    std::printf("%s walks: %d of %d converged (%d across an index-matched boundary), %d iterations\n", file.c_str(),
+                converged, kTrials, crossing, iterations);
     // Small steps away from folds: nearly all converge, in few (quadratically convergent) iterations: about 3.2
     // per walk (without the length rows' coupling to the predecessor, 5.6).
     EXPECT_GE(converged, kTrials * 9 / 10);
     EXPECT_LE(iterations, converged * 4);
+    expectCrossings(crossing);
 }
 
 // Propagation with the chain's own direction reproduces the chain; with directions about it, the floor area per
-// unit solid angle at the point light (offsets and segments held) is 1 / G through the medium vertices.
-TEST(ManifoldMedium, PropagationReproducesTheChainAndItsGeometryTerm) {
-    const auto scene = glassSphere();
+// unit solid angle at the point light (offsets and segments held) is 1 / G through the medium vertices. A crossing
+// bends no ray: G is the same with the boundary, and propagation passes through it.
+TEST_P(ManifoldMediumScenes, PropagationReproducesTheChainAndItsGeometryTerm) {
+    const std::string &file = GetParam();
+    const auto scene = glassSphere(file);
     const ManifoldWalk walker(*scene);
     PCG32 rng(13, 6);
+    int crossing = 0;
     for (int trial = 0; trial < 30; ++trial) {
         Vec3 x1, d;
         const std::vector<ManifoldVertex> chain = randomChain(*scene, rng, x1, d);
+        crossing += crossings(*scene, chain) > 0;
         const auto traced = walker.propagate(chain, x1, d, nullptr);
         ASSERT_TRUE(traced);
         ASSERT_EQ(traced->size(), chain.size());
@@ -262,7 +305,12 @@ TEST(ManifoldMedium, PropagationReproducesTheChainAndItsGeometryTerm) {
         // A point has no cosine: G is the solid angle at x_1 per unit area at the floor.
         EXPECT_NEAR(*g * cross(ds, dt).length(), 1.0, 1e-4) << "trial " << trial;
     }
+    std::printf("%s: %d of 30 chains cross an index-matched boundary\n", file.c_str(), crossing);
+    expectCrossings(crossing);
 }
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ManifoldMediumScenes, ::testing::Values(kSphere, kIndexMatched),
+                         [](const auto &info) { return info.param == kSphere ? "Sphere" : "IndexMatched"; });
 
 // The offset Jacobian with medium vertices (offset_jacobian.h): on a chain x_a, M_1, M_2, x_b, M_3, x_c (x_a, x_c
 // fixed points, x_b on the floor, the medium vertices walked from x_a before x_b and from x_c after it), the

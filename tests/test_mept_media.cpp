@@ -14,6 +14,11 @@
 // |z| = 14 on volumetric-caustic-small). So volpath is the reference where it resolves the image, single
 // scattering in ring-caustic-medium's fog (2 edges: E M L, which MEPT explores with the medium x_b's junction move
 // and the distance move), and BDPT elsewhere. test_long_mept_media.cpp: 32 x 32, 32 renders, blocks of 8.
+//
+// Chains across index-matched boundaries: volumetric-caustic-small's camera sees the gas through the index-matched
+// front wall, so a chain with a medium vertex next to the camera crosses it (the held edge from the camera, or the
+// walk's last segment). With dtheta = 20 degrees ("_dtheta20") medium vertices join chains often enough for those
+// chains to carry a share of the image (bench_manifold's Table 1 "cross" column counts them).
 #include <gtest/gtest.h>
 
 #include "test_mept_media_common.h"
@@ -31,6 +36,7 @@ TEST_P(MEPTMedia, Agrees) {
 INSTANTIATE_TEST_SUITE_P(Scenes, MEPTMedia,
                          ::testing::Values(MediaCase{"ring-caustic-medium", 3},
                                            MediaCase{"volumetric-caustic-small", 6},
+                                           MediaCase{"volumetric-caustic-small", 6, 8, "bdpt", 8, 4, 20},
                                            MediaCase{"glass-egg-largelight", 6, 16},
                                            MediaCase{"ring-caustic-medium", 2, 8, "volpath"}),
                          [](const auto &info) { return caseName(info.param); });

@@ -19,12 +19,18 @@ struct MediaCase {
     std::string reference = "bdpt";
     int budget = 8;  // mept's seeds per pixel
     int chains = 4;  // mept's numChains: bursts per pixel on average
+    // mept's manifoldGlossyAngle in degrees: larger, medium vertices join chains more often (manifold_perturbation.h).
+    int glossyAngle = 1;
 };
 
 inline std::vector<std::pair<std::string, std::string>> meptParams(const MediaCase &c) {
-    return {{"directSamples", "-1"},          {"lensPerturbation", "false"},
-            {"causticPerturbation", "false"}, {"multiChainPerturbation", "false"},
-            {"manifoldPerturbation", "true"}, {"numChains", std::to_string(c.chains) + ".0"}};
+    return {{"directSamples", "-1"},
+            {"lensPerturbation", "false"},
+            {"causticPerturbation", "false"},
+            {"multiChainPerturbation", "false"},
+            {"manifoldPerturbation", "true"},
+            {"numChains", std::to_string(c.chains) + ".0"},
+            {"manifoldGlossyAngle", std::to_string(c.glossyAngle) + ".0"}};
 }
 
 inline std::vector<std::pair<std::string, std::string>> memltParams(int res) {
@@ -41,7 +47,8 @@ inline ConvergenceSetup mediaSetup(const MediaCase &c, ConvergenceSetup base = {
 }
 
 inline std::string caseName(const MediaCase &c) {
-    return gtestName(c.scene) + "_" + c.reference + "_depth" + std::to_string(c.maxDepth);
+    return gtestName(c.scene) + "_" + c.reference + "_depth" + std::to_string(c.maxDepth) +
+           (c.glossyAngle != 1 ? "_dtheta" + std::to_string(c.glossyAngle) : "");
 }
 
 }  // namespace pf::test

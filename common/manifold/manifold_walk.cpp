@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "bsdf/bsdf.h"
 #include "manifold/chain_jacobian.h"
 #include "manifold/specular_constraint.h"
 #include "scene/scene.h"
@@ -16,12 +17,30 @@ namespace {
 // self-intersection is avoided with tmin = the scene's offset length instead.
 Ray chainRay(const Scene &scene, const Vec3 &origin, const Vec3 &d) { return Ray(origin, d, scene.epsilonAt(origin)); }
 
+// Bound on the index-matched surfaces one chain segment crosses, so that coincident null surfaces cannot loop.
+constexpr int kMaxCrossings = 256;
+
 // Whether a constrained vertex keeps its configuration along a corrector trace: same shape and BSDF, hit from
 // the same side, and an outgoing direction on the side its scattering type requires.
 bool sameConfiguration(const ManifoldVertex &old, const Intersection &its, const Vec3 &wi) {
     if (its.shape != old.its.shape || its.bsdf() != old.its.bsdf()) return false;
     return (dot(wi, its.n) > 0) == old.predecessorAbove;
 }
+
+}  // namespace
+
+bool intersectOpaque(const Scene &scene, Ray ray, Intersection &its) {
+    for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
+        if (!scene.intersect(ray, its)) return false;
+        const BSDF *bsdf = its.bsdf();
+        if (!bsdf || !bsdf->isNull()) return true;
+        // Along the same line past the crossing (the ray's direction is a unit vector: t is a length).
+        ray.tmin = its.t + scene.epsilonAt(its.p);
+    }
+    return true;
+}
+
+namespace {
 
 size_t constrainedCount(const std::vector<ManifoldVertex> &chain) {
     return static_cast<size_t>(
@@ -50,9 +69,11 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
     for (size_t i = 1; i + 1 < k; ++i) {
         const ManifoldVertex &old = chain[i];
         if (old.type == ManifoldVertexType::Medium) {
-            // [TR §7.1]: x'_i = x_{i-1} + |x_{i-1} - x_i| d, in the same medium (no surface on the way), then the
-            // offset becomes the outgoing direction in the frame of the new incoming one.
-            if (scene_.occluded(Ray(rayOrigin, dir, scene_.epsilonAt(rayOrigin), old.segment))) return std::nullopt;
+            // [TR §7.1]: x'_i = x_{i-1} + |x_{i-1} - x_i| d, with no surface on the way but index-matched ones, then
+            // the offset becomes the outgoing direction in the frame of the new incoming one.
+            Intersection blocker;
+            if (intersectOpaque(scene_, Ray(rayOrigin, dir, scene_.epsilonAt(rayOrigin), old.segment), blocker))
+                return std::nullopt;
             ManifoldVertex v = old;
             v.p = rayOrigin + dir * old.segment;
             const std::optional<Vec3> wo = v.setIncoming(dir) ? microfacetNormal(v) : std::nullopt;
@@ -63,7 +84,7 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
             continue;
         }
         Intersection its;
-        if (!scene_.intersect(chainRay(scene_, rayOrigin, dir), its)) return std::nullopt;
+        if (!intersectOpaque(scene_, chainRay(scene_, rayOrigin, dir), its)) return std::nullopt;
         const Vec3 wi = -dir;
         if (!sameConfiguration(old, its, wi)) return std::nullopt;
         std::optional<ManifoldVertex> v = ManifoldVertex::surface(its, old.scattering, old.eta);
@@ -93,7 +114,7 @@ std::optional<std::vector<ManifoldVertex>> ManifoldWalk::propagate(const std::ve
         return out;
     }
     Intersection its;
-    if (!scene_.intersect(chainRay(scene_, rayOrigin, dir), its)) return std::nullopt;
+    if (!intersectOpaque(scene_, chainRay(scene_, rayOrigin, dir), its)) return std::nullopt;
     std::optional<ManifoldVertex> end = ManifoldVertex::surface(its);
     if (!end) return std::nullopt;
     out[k - 1] = *end;
@@ -156,7 +177,8 @@ WalkResult ManifoldWalk::walk(const std::vector<ManifoldVertex> &chain, const Ma
     }
     // The plane stood in for the real geometry at the end: x_{n-1} must see x'_n (§6.4).
     current[k - 1] = target;
-    if (scene_.occluded(scene_.spawnRayTo(current[k - 2].p, target.p))) {
+    Intersection blocker;
+    if (intersectOpaque(scene_, scene_.spawnRayTo(current[k - 2].p, target.p), blocker)) {
         result.status = WalkStatus::Occluded;
         return result;
     }

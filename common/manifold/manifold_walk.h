@@ -25,10 +25,14 @@
 // walks from 95% to 93% and the acceptance from 84% to 83%).
 //
 // Medium vertices (ALGORITHMS.md §6.7, [TR §7.1]): the corrector places a medium vertex at its segment length
-// from its predecessor along the propagated direction, requires that no surface lies in between (an index-matched
-// boundary too: chains do not cross them yet), and leaves it in the direction its offset gives in the frame of
-// the new incoming direction. ∇C then has the length rows of chain_jacobian.h, so the predictor is the exact
-// first-order model of the walked manifold.
+// from its predecessor along the propagated direction, requires that no surface other than an index-matched one
+// lies in between, and leaves it in the direction its offset gives in the frame of the new incoming direction. ∇C then
+// has the length rows of chain_jacobian.h, so the predictor is the exact first-order model of the walked manifold.
+//
+// Index-matched boundaries (surfaces with the null BSDF, edge.h): chain segments pass straight through them, in the
+// corrector, in propagation and in the final visibility check. A crossing does not bend the ray, so it is no
+// vertex of the chain: ∇C, G and the offset Jacobian do not see it; the path-space edges that the perturbations
+// rebuild from the walked chain carry its transmittance through both media and count it for the path's depth.
 //
 // Scene scale L: the seeds use L = max_i ‖x_i‖, which depends on where the world origin is (a scene translated
 // far away would demand absurd relative accuracy). We use the diagonal of the scene's bounding box instead: a
@@ -45,6 +49,7 @@
 
 #include "core/vector.h"
 #include "manifold/manifold_vertex.h"
+#include "scene/intersection.h"
 
 namespace pf {
 
@@ -81,6 +86,10 @@ struct WalkResult {
     WalkStatistics stats;
     bool converged() const { return status == WalkStatus::Converged; }
 };
+
+// The first surface along `ray` that is not index-matched (a BSDF other than the null one), into its; false when
+// there is none before ray.tmax. ray.d must be a unit vector. The crossings keep the ray's line exactly.
+bool intersectOpaque(const Scene &scene, Ray ray, Intersection &its);
 
 class ManifoldWalk {
 public:

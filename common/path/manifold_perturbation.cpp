@@ -442,7 +442,12 @@ bool ManifoldPerturbation::connectChain(const Scene &scene, Sampler &sampler, co
     }
     y.vertex(st.fixed).ps.uv = traced.vertex(st.fixed).ps.uv;
     for (int i = st.fixed + dir; i != st.moving; i += dir) y.vertex(i) = traced.vertex(i);
-    for (int i = std::min(st.fixed, st.moving); i < std::max(st.fixed, st.moving); ++i) y.edge(i) = traced.edge(i);
+    bool crosses = false;
+    for (int i = std::min(st.fixed, st.moving); i < std::max(st.fixed, st.moving); ++i) {
+        y.edge(i) = traced.edge(i);
+        crosses = crosses || y.edge(i).crossings > 0;
+    }
+    stats_.crossingWalks += crosses;
 
     // The reverse walk must bring the chain back to x's (mandatory, §6.5).
     const auto back = manifoldChain(y, st.fixed, st.moving);
@@ -532,6 +537,7 @@ void ManifoldPerturbation::addCounters(ChainCounters &counters) const {
     counter(counters, "manifoldNonReversible").value += stats_.nonReversible;
     counter(counters, "manifoldGlossySpecular").value += stats_.glossySpecular;
     counter(counters, "manifoldMediumVertices").value += stats_.mediumVertices;
+    counter(counters, "manifoldCrossingWalks").value += stats_.crossingWalks;
 }
 
 }  // namespace pf

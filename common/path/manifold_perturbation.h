@@ -93,7 +93,10 @@
 // in x_b's plane with x_b's normal (the offset is then the area measure's own coordinate, and the kernel is
 // symmetric); on a curved light the move fails. This explores soft shadows and depth of field.
 //
-// Not done: chains that cross index-matched boundaries (a held edge must cross no surface).
+// Index-matched boundaries (the null BSDF, edge.h) may lie on any edge of a chain: the walk passes straight through
+// them (manifold_walk.h), and a held medium vertex beyond one lies in the medium on its far side (placeHeld()). They
+// bend no ray, so C, G_o and J are those of the chain without them; the traced edges carry their transmittance
+// through both media and the free-flight probabilities of every medium segment, which T_M and rho use as above.
 #pragma once
 #include <vector>
 
@@ -115,7 +118,8 @@ public:
     double density(const Scene &scene, const PathView &x, const PathView &y,
                    const MutationRecord &record) const override;
     // Table 1 (ALGORITHMS.md §5.5): walks, converged walks, Newton iterations, chain sizes, reverse walks
-    // and non-reversible proposals; and the glossy and the medium vertices that proposals walked as specular.
+    // and non-reversible proposals; the glossy and the medium vertices that proposals walked as specular; and the
+    // converged walks whose chain crosses an index-matched boundary.
     void addCounters(ChainCounters &counters) const override;
 
     // A source: the vertex whose direction is perturbed and the direction of the walk (+1 towards the camera).
@@ -163,6 +167,7 @@ private:
     struct Statistics {
         double walks = 0, converged = 0, iterations = 0, chainVertices = 0, maxChainVertices = 0;
         double reverseWalks = 0, nonReversible = 0, glossySpecular = 0, mediumVertices = 0;
+        double crossingWalks = 0;  // converged walks whose chain crosses an index-matched boundary
     };
     // Counts a glossy or medium vertex that a proposal walked as part of a chain (Table 1).
     void countChainVertex(const PathVertex &v) const;

@@ -9,16 +9,18 @@ namespace pf {
 
 namespace {
 
-// y's vertex i moved to p: its edge from the anchor j is rebuilt (connect walks from the light side) and must
-// cross no surface; the medium vertex keeps its medium, and its wi points to its predecessor in its walk.
+// y's vertex i moved to p: its edge from the anchor j is rebuilt (connect walks from the light side). The edge
+// may cross index-matched boundaries: the vertex then lies in the medium beyond the last one it crosses from the
+// anchor (mediumAt()), and its wi points to its predecessor in its walk.
 bool moveAlongEdge(const Scene &scene, MutablePath &y, int i, int j, const Vec3 &p) {
     PathVertex &v = y.vertex(i);
     v.its.p = p;
+    v.medium = mediumAt(scene, y.vertex(j), p);
+    if (!v.medium) return false;
     const int pred = v.walkMode == TransportMode::Importance ? i - 1 : i + 1;
     v.its.wi = normalize(y.vertex(pred).position() - p);
     const int lo = std::min(i, j);
-    PathEdge &edge = y.edge(lo);
-    return connect(scene, y.vertex(lo), y.vertex(lo + 1), edge) && edge.crossings == 0;
+    return connect(scene, y.vertex(lo), y.vertex(lo + 1), y.edge(lo));
 }
 
 }  // namespace
@@ -32,7 +34,7 @@ std::vector<MediumDistancePerturbation::Source> MediumDistancePerturbation::sour
         if (x.vertex(i).type != VertexType::Medium) continue;
         for (const int j : {i - 1, i + 1}) {
             const int k = 2 * i - j;
-            if (x.edge(std::min(i, j)).crossings == 0 && isJunction(x, std::min(i, k))) list.push_back({i, j});
+            if (isJunction(x, std::min(i, k))) list.push_back({i, j});
         }
     }
     return list;
@@ -61,7 +63,7 @@ double MediumDistancePerturbation::density(const Scene &, const PathView &x, con
     if (std::none_of(list.begin(), list.end(), [&](const Source &s) { return s.vertex == i && s.anchor == j; }))
         return 0.0;
     const PathVertex &v = y.vertex(i);
-    if (v.type != VertexType::Medium || y.edge(std::min(i, j)).crossings != 0) return 0.0;
+    if (v.type != VertexType::Medium) return 0.0;
     // y's x_i must lie on x's edge from the anchor (the Dirac delta in ω), on the same side.
     const Vec3 &anchor = x.vertex(j).position();
     const Vec3 from = x.vertex(i).position() - anchor, to = v.position() - anchor;

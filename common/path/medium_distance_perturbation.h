@@ -5,10 +5,11 @@
 // neighbour x_k. The manifold perturbation keeps medium distances fixed (its chains hold the segment lengths), so
 // this is the move that changes them.
 //
-// Sources are the (x_i, x_j) with x_i a medium vertex, an edge x_j x_i that crosses no surface (not even an
-// index-matched one, so that x_i stays in the same medium segment) and a junction x_i x_k (a connection can end
-// at x_k; path/mutation.h). A proposal is kept only if its new edge x_j x'_i crosses no surface either, so the
-// support is symmetric, and every vertex but x_i stays.
+// Sources are the (x_i, x_j) with x_i a medium vertex and a junction x_i x_k (a connection can end at x_k;
+// path/mutation.h). The edge x_j x_i may cross index-matched boundaries (the null BSDF, edge.h): they do not bend
+// it, so x'_i stays on its line, and it lies in the medium beyond the last boundary that x_j x'_i crosses (which
+// can be another medium than x_i's: the move then carries x_i across the boundary). A proposal is kept only if no
+// other surface lies on x_j x'_i, so the support is symmetric, and every vertex but x_i stays.
 //
 // The density. Measured from the anchor, x_i has the coordinates (ω, t): direction and distance, with the volume
 // element dV = t² dω dt. The move keeps ω (a Dirac delta in ω, the same in both directions, which cancels in the

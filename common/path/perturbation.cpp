@@ -2,6 +2,7 @@
 
 #include "bsdf/bsdf.h"
 #include "core/frame.h"
+#include "integrators/visibility.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -68,17 +69,28 @@ uint32_t diracLobe(const PathVertex &v) {
 
 }  // namespace
 
+const Medium *mediumAt(const Scene &scene, const PathVertex &from, const Vec3 &p) {
+    const Vec3 d = normalize(p - from.position());
+    const Medium *medium = from.mediumToward(d);
+    const bool onSurface = from.its.shape && (from.type == VertexType::Surface || from.type == VertexType::EmitterNode);
+    const Ray ray = onSurface ? scene.spawnRayTo(from.its, p) : scene.spawnRayTo(from.position(), p);
+    // Each index-matched boundary on the way switches to the medium on its far side (media are not attenuated
+    // here: only which one p lies in matters).
+    const auto cross = [&](const Intersection &its, const Spectrum &) { medium = mediumAfter(its, d, medium); };
+    return walkTransmittance(scene, ray, nullptr, cross, false).isBlack() ? nullptr : medium;
+}
+
 bool placeHeld(const Scene &scene, TransportMode mode, const PathVertex &from, const Vec3 &d, double held,
                PathEdge &edge, PathVertex &succ) {
     succ = PathVertex();
     succ.type = VertexType::Medium;
     succ.its.p = from.position() + d * held;
     succ.its.wi = -d;
-    succ.medium = from.mediumToward(d);
+    succ.medium = mediumAt(scene, from, succ.its.p);
     succ.walkMode = mode;
     if (!succ.medium) return false;
     const bool up = mode == TransportMode::Importance;
-    return connect(scene, up ? from : succ, up ? succ : from, edge) && edge.crossings == 0;
+    return connect(scene, up ? from : succ, up ? succ : from, edge);
 }
 
 bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const PathView &x, MutablePath &y, int from,

@@ -56,12 +56,17 @@ Vec3 rayDirection(const Scene &scene, const PathVertex &from, const PathVertex &
 // a scattering vertex of the same type as x's (a surface also stands in for an emitter node at index 0, to
 // be cast by the caller). False when the configuration changes or the ray leaves the scene. With held > 0,
 // vertex `to` is a medium vertex of a manifold chain (ALGORITHMS.md §6.7): it is placed at distance `held` from
-// its predecessor along the propagated direction instead of by free-flight sampling, and its edge must cross no
-// surface (placeHeld()).
+// its predecessor along the propagated direction instead of by free-flight sampling (placeHeld()).
 bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const PathView &x, MutablePath &y, int from,
                int to, Vec3 d, double held = 0.0);
+// The medium that point p lies in, seen from vertex `from` along the straight line to it: from's medium towards p,
+// switched at every index-matched boundary on the way (edge.h); nullptr when p lies in vacuum or behind a surface
+// that is not index-matched.
+const Medium *mediumAt(const Scene &scene, const PathVertex &from, const Vec3 &p);
 // The medium vertex at distance `held` from vertex `from` along unit direction d, reached by the walk of `mode`,
-// and its edge (transmittance, densities) from `from`; false when a surface lies in between.
+// and its edge (transmittance through every medium on the way, densities) from `from`; false when a surface that
+// is not index-matched lies in between. A crossing does not bend the edge, so the held length is the distance
+// between the two vertices and the vertex lies in the medium beyond the last crossing (mediumAt()).
 bool placeHeld(const Scene &scene, TransportMode mode, const PathVertex &from, const Vec3 &d, double held,
                PathEdge &edge, PathVertex &succ);
 
