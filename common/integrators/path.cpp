@@ -135,8 +135,10 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
 
     for (;;) {
         MediumSample ms;
-        const double segment = its.isValid() ? (its.p - origin).length() : kInfinity;
-        if (medium && medium->sampleDistance(Ray(origin, ray.d, 0, segment), sampler.next1D(), ms)) {
+        // The segment's length (a square root) only where a medium needs it: `path` never does.
+        if (medium &&
+            medium->sampleDistance(Ray(origin, ray.d, 0, its.isValid() ? (its.p - origin).length() : kInfinity),
+                                   sampler.next1D(), ms)) {
             // Medium interaction: a scattering event with weight sigma_s * T / pdfSuccess.
             if (maxDepth_ >= 0 && depth >= maxDepth_) break;
             const int budget = crossingBudget(maxDepth_, depth);

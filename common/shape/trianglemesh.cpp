@@ -185,11 +185,14 @@ void TriangleMesh::rebuildCreases(double maxAngleDeg) {
 
 void TriangleMesh::updateSamplingData() {
     std::vector<double> areas(triangles_.size());
+    flat_.resize(triangles_.size());
     bbox_ = AABB();
     for (size_t t = 0; t < triangles_.size(); ++t) {
         const auto &tri = triangles_[t];
-        areas[t] =
-            0.5 * cross(positions_[tri[1]] - positions_[tri[0]], positions_[tri[2]] - positions_[tri[0]]).length();
+        const Vec3 e1 = positions_[tri[1]] - positions_[tri[0]], e2 = positions_[tri[2]] - positions_[tri[0]];
+        areas[t] = 0.5 * cross(e1, e2).length();
+        const InverseChart j = inverseChart(static_cast<uint32_t>(t));
+        flat_[t] = {faceNormal(positions_, tri), e1 * j.j00 + e2 * j.j10, e1 * j.j01 + e2 * j.j11};
         for (uint32_t i : tri) bbox_.expand(positions_[i]);
     }
     areaDist_ = Distribution1D(areas);
@@ -221,7 +224,7 @@ Vec3 TriangleMesh::surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Ve
     const Vec3 &p0 = positions_[tri[0]], &p1 = positions_[tri[1]], &p2 = positions_[tri[2]];
     const double b0 = 1.0 - b1 - b2;
     p = p0 * b0 + p1 * b1 + p2 * b2;
-    ng = normalize(cross(p1 - p0, p2 - p0));
+    ng = flat_[prim].ng;
     uv = uvs_.empty() ? Vec2(b1, b2) : uvs_[tri[0]] * b0 + uvs_[tri[1]] * b1 + uvs_[tri[2]] * b2;
     if (normals_.empty()) return Vec3();
     const Vec3 N = normals_[tri[0]] * b0 + normals_[tri[1]] * b1 + normals_[tri[2]] * b2;
@@ -253,12 +256,8 @@ void TriangleMesh::fillSurface(uint32_t prim, double b1, double b2, Intersection
     const Vec3 N = surfacePoint(prim, b1, b2, its.p, its.n, its.uv);
     const double len = N.length();
     const Vec3 ns = len > 0 ? N / len : its.n;
-    const auto &tri = triangles_[prim];
-    const Vec3 &p0 = positions_[tri[0]];
-    const Vec3 e1 = positions_[tri[1]] - p0, e2 = positions_[tri[2]] - p0;
-    const InverseChart j = inverseChart(prim);
-    its.dpdu = e1 * j.j00 + e2 * j.j10;
-    its.dpdv = e1 * j.j01 + e2 * j.j11;
+    its.dpdu = flat_[prim].dpdu;
+    its.dpdv = flat_[prim].dpdv;
     its.dndu = its.dndv = Vec3();
     its.normalDerivativesPending = !normals_.empty();
     its.shFrame = Frame::fromNormalTangent(ns, its.dpdu);
