@@ -13,6 +13,14 @@ Distribution1D::Distribution1D(const std::vector<double> &w) : func_(w), cdf_(w.
 }
 
 size_t Distribution1D::sampleDiscrete(double u, double *pmfOut, double *uRemapped) const {
+    // A single entry (a scene's only emitter) needs no search, and u stays as it is: the general remapping
+    // below gives (u - 0) / (1 - 0), the same bits.
+    if (func_.size() == 1) {
+        const double p = pmf(0);
+        if (pmfOut) *pmfOut = p;
+        if (uRemapped) *uRemapped = p > 0 ? std::min(u, 0x1.fffffffffffffp-1) : 0;
+        return 0;
+    }
     // Largest index i with cdf[i] <= u, skipping zero-weight entries.
     const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
     size_t i = static_cast<size_t>(std::max<std::ptrdiff_t>(0, (it - cdf_.begin()) - 1));

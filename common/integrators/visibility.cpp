@@ -21,12 +21,10 @@ Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium
         return scene.occluded(ray) ? Spectrum(0.0) : Spectrum(1.0);
     Spectrum T(1.0);
     Vec3 start = ray.o;
-    Intersection later;
     for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
-        // The first surface is found straight into *firstHit (an Intersection is some 300 bytes to copy).
-        Intersection &its = crossings == 0 && firstHit ? *firstHit : later;
-        its = Intersection();
+        Intersection its;
         const bool hit = scene.intersect(ray, its);
+        if (crossings == 0 && firstHit) *firstHit = its;
         if (trackMedia && medium) {
             const double length = hit ? (its.p - start).length()
                                       : (std::isfinite(ray.tmax) ? (ray(ray.tmax) - start).length() : kInfinity);
