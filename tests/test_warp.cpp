@@ -99,26 +99,6 @@ TEST(Warp, UniformDiskAndTriangle) {
     EXPECT_NEAR(b2 / n, 1.0 / 3.0, 4 * sdMean);
 }
 
-// The concentric map takes sin and cos of its wedge angle from Taylor polynomials (warp.cpp): they must agree
-// with libm's to a few ulps over the whole square, wedge borders and the corners (|angle| = pi/4) included.
-TEST(Warp, ConcentricDiskMatchesLibm) {
-    const auto reference = [](const Vec2 &u) {
-        const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
-        const double r = a * a > b * b ? a : b;
-        const double phi = a * a > b * b ? (kPi / 4.0) * (b / a) : (kPi / 2.0) - (kPi / 4.0) * (a / b);
-        return Vec2(r * std::cos(phi), r * std::sin(phi));
-    };
-    PCG32 rng(5, 6);
-    std::vector<Vec2> us = {{0.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}, {1.0, 0.0}, {0.75, 0.75}, {0.25, 0.9}};
-    for (int i = 0; i < 200000; ++i) us.emplace_back(rng.nextDouble(), rng.nextDouble());
-    double worst = 0;
-    for (const Vec2 &u : us) {
-        const Vec2 p = warp::squareToUniformDiskConcentric(u), q = reference(u);
-        worst = std::max({worst, std::abs(p.x - q.x), std::abs(p.y - q.y)});
-    }
-    EXPECT_LE(worst, 4e-16);  // a few ulps of coordinates of magnitude up to 1
-}
-
 TEST(Distribution, DiscreteFrequenciesMatchWeights) {
     const std::vector<double> w = {1, 0, 3, 0.5, 5.5};
     Distribution1D d(w);
