@@ -400,6 +400,42 @@ TEST(Differentials, MeshNormalDerivativesOnRequest) {
     EXPECT_EQ(v->its.dndv, its.dndv);
 }
 
+// Flat-shaded meshes (one normal at each triangle's corners) keep a shading frame per triangle (issue 17): a
+// hit gets the frame that the general path, interpolating and normalizing the corner normals, computes for the
+// same triangle in a mesh that also has a smooth triangle, up to rounding; the geometric normal is turned to
+// the shading normal's side in both.
+TEST(ShapeHits, FlatShadedMeshFrameIsTheInterpolatedOne) {
+    const Vec3 n = normalize(Vec3(0.2, 0.1, -1));  // tilted, and on the side opposite to the winding's normal
+    MeshData flat;
+    flat.positions = {{0, 0, 0}, {2, 0, 0.3}, {0.5, 1.5, -0.2}};
+    flat.normals = {n, n, n};
+    flat.triangles = {{0, 1, 2}};
+    MeshData mixed = flat;
+    const MeshData bent = bentTriangle(false, true);
+    for (int k = 0; k < 3; ++k) {
+        mixed.positions.push_back(bent.positions[k] + Vec3(10, 0, 0));
+        mixed.normals.push_back(bent.normals[k]);
+    }
+    mixed.triangles.push_back({3, 4, 5});
+    auto flatScene = makeScene({makeMesh(flat)}), mixedScene = makeScene({makeMesh(mixed)});
+    for (const Vec3 &o : {Vec3(0.8, 0.5, 5), Vec3(0.3, 0.2, -4), Vec3(1.5, 0.1, 3)}) {
+        const Ray ray(o, normalize(Vec3(0.7, 0.5, 0.1) - o));
+        Intersection a, b;
+        ASSERT_TRUE(flatScene->intersect(ray, a));
+        ASSERT_TRUE(mixedScene->intersect(ray, b));
+        EXPECT_EQ(a.p, b.p);
+        EXPECT_EQ(a.n, b.n);
+        EXPECT_GT(dot(a.n, n), 0);
+        expectVecNear(a.shFrame.n, n, 1e-15, "shading normal");
+        expectVecNear(a.shFrame.s, b.shFrame.s, 1e-15, "s");
+        expectVecNear(a.shFrame.t, b.shFrame.t, 1e-15, "t");
+        expectVecNear(a.shFrame.n, b.shFrame.n, 1e-15, "n");
+        EXPECT_NEAR(dot(a.shFrame.s, a.shFrame.n), 0, 1e-15);
+        EXPECT_EQ(a.dpdu, b.dpdu);
+        EXPECT_EQ(a.dpdv, b.dpdv);
+    }
+}
+
 TEST(Differentials, Meshes) {
     for (const bool uvs : {true, false})
         for (const bool smooth : {true, false}) {

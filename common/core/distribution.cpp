@@ -4,18 +4,43 @@
 
 namespace pf {
 
+namespace {
+
+// Largest cdf size that sampleDiscrete searches by counting.
+constexpr size_t kLinearSearchMax = 16;
+
+}  // namespace
+
 Distribution1D::Distribution1D(const std::vector<double> &w) : func_(w), cdf_(w.size() + 1, 0.0) {
     for (size_t i = 0; i < w.size(); ++i) cdf_[i + 1] = cdf_[i] + std::max(0.0, w[i]);
     sum_ = cdf_.back();
     if (sum_ > 0)
         for (double &c : cdf_) c /= sum_;
     cdf_.back() = 1.0;
+    pmf_.reserve(w.size());
+    for (const double f : func_) pmf_.push_back(sum_ > 0 ? f / sum_ : 0.0);
 }
 
 size_t Distribution1D::sampleDiscrete(double u, double *pmfOut, double *uRemapped) const {
-    // Largest index i with cdf[i] <= u, skipping zero-weight entries.
-    const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u);
-    size_t i = static_cast<size_t>(std::max<std::ptrdiff_t>(0, (it - cdf_.begin()) - 1));
+    // A single entry (a scene's only emitter) needs no search, and u stays as it is: the general remapping
+    // below gives (u - 0) / (1 - 0), the same bits.
+    if (func_.size() == 1) {
+        const double p = pmf(0);
+        if (pmfOut) *pmfOut = p;
+        if (uRemapped) *uRemapped = p > 0 ? std::min(u, 0x1.fffffffffffffp-1) : 0;
+        return 0;
+    }
+    // Largest index i with cdf[i] <= u, skipping zero-weight entries. A few entries (a mesh light's
+    // triangles) are counted without branches: a binary search's branch on u is a coin toss for the
+    // processor's predictor, and the count is the same index.
+    std::ptrdiff_t atOrBelow;
+    if (cdf_.size() <= kLinearSearchMax) {
+        atOrBelow = 0;
+        for (const double c : cdf_) atOrBelow += c <= u;
+    } else {
+        atOrBelow = std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin();
+    }
+    size_t i = static_cast<size_t>(std::max<std::ptrdiff_t>(0, atOrBelow - 1));
     i = std::min(i, func_.size() - 1);
     while (i > 0 && func_[i] <= 0) --i;
     const double p = pmf(i);

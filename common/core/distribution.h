@@ -17,13 +17,14 @@ public:
     bool empty() const { return sum_ <= 0; }
     // Discrete: returns index with probability w_i / sum; remaps u to [0,1) for reuse.
     size_t sampleDiscrete(double u, double *pmf = nullptr, double *uRemapped = nullptr) const;
-    double pmf(size_t i) const { return sum_ > 0 ? func_[i] / sum_ : 0.0; }
+    double pmf(size_t i) const { return pmf_[i]; }
     // Continuous on [0,1): piecewise-constant density proportional to the weights.
     double sampleContinuous(double u, double *pdf = nullptr, size_t *offset = nullptr) const;
     double pdfContinuous(double x) const;
 
 private:
     std::vector<double> func_, cdf_;
+    std::vector<double> pmf_;  // func_[i] / sum_ (0 without mass), divided once here rather than per sample
     double sum_ = 0;
 };
 

@@ -123,6 +123,7 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
     const Medium *medium = media_ ? scene.sensor().medium() : nullptr;
     Intersection its;
     scene.intersect(ray, its);
+    MediumSample ms;
     const BSDFContext ctx;
     double eta = 1.0;  // accumulated relative IOR, for Russian roulette (Mitsuba's radiance scaling)
     int depth = 1, crossings = 0;
@@ -134,9 +135,15 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
     int chained = -1, chainBudget = 0;
 
     for (;;) {
-        MediumSample ms;
-        const double segment = its.isValid() ? (its.p - origin).length() : kInfinity;
-        if (medium && medium->sampleDistance(Ray(origin, ray.d, 0, segment), sampler.next1D(), ms)) {
+        // Free-flight sampling only where there is a medium: `path` never pays for its record or the
+        // segment's length (a square root).
+        bool interacts = false;
+        if (medium) {
+            ms = MediumSample();
+            interacts = medium->sampleDistance(
+                Ray(origin, ray.d, 0, its.isValid() ? (its.p - origin).length() : kInfinity), sampler.next1D(), ms);
+        }
+        if (interacts) {
             // Medium interaction: a scattering event with weight sigma_s * T / pdfSuccess.
             if (maxDepth_ >= 0 && depth >= maxDepth_) break;
             const int budget = crossingBudget(maxDepth_, depth);

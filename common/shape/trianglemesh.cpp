@@ -1,5 +1,6 @@
 #include "shape/trianglemesh.h"
 
+#include <algorithm>
 #include <cfloat>
 #include <map>
 
@@ -185,15 +186,27 @@ void TriangleMesh::rebuildCreases(double maxAngleDeg) {
 
 void TriangleMesh::updateSamplingData() {
     std::vector<double> areas(triangles_.size());
+    constants_.resize(triangles_.size());
     bbox_ = AABB();
     for (size_t t = 0; t < triangles_.size(); ++t) {
         const auto &tri = triangles_[t];
-        areas[t] =
-            0.5 * cross(positions_[tri[1]] - positions_[tri[0]], positions_[tri[2]] - positions_[tri[0]]).length();
+        const Vec3 e1 = positions_[tri[1]] - positions_[tri[0]], e2 = positions_[tri[2]] - positions_[tri[0]];
+        areas[t] = 0.5 * cross(e1, e2).length();
+        const InverseChart j = inverseChart(static_cast<uint32_t>(t));
+        constants_[t] = {faceNormal(positions_, tri), e1 * j.j00 + e2 * j.j10, e1 * j.j01 + e2 * j.j11};
         for (uint32_t i : tri) bbox_.expand(positions_[i]);
     }
     areaDist_ = Distribution1D(areas);
     area_ = areaDist_.sum();
+
+    const bool flat = std::all_of(triangles_.begin(), triangles_.end(), [&](const std::array<uint32_t, 3> &tri) {
+        return normals_.empty() || (normals_[tri[0]] == normals_[tri[1]] && normals_[tri[0]] == normals_[tri[2]]);
+    });
+    flatFrames_.clear();
+    if (flat)
+        for (size_t t = 0; t < triangles_.size(); ++t)
+            flatFrames_.push_back(Frame::fromNormalTangent(
+                normals_.empty() ? constants_[t].ng : normalize(normals_[triangles_[t][0]]), constants_[t].dpdu));
 }
 
 unsigned TriangleMesh::addToEmbree(RTCDevice device, RTCScene scene) const {
@@ -221,10 +234,11 @@ Vec3 TriangleMesh::surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Ve
     const Vec3 &p0 = positions_[tri[0]], &p1 = positions_[tri[1]], &p2 = positions_[tri[2]];
     const double b0 = 1.0 - b1 - b2;
     p = p0 * b0 + p1 * b1 + p2 * b2;
-    ng = normalize(cross(p1 - p0, p2 - p0));
+    ng = constants_[prim].ng;
     uv = uvs_.empty() ? Vec2(b1, b2) : uvs_[tri[0]] * b0 + uvs_[tri[1]] * b1 + uvs_[tri[2]] * b2;
     if (normals_.empty()) return Vec3();
-    const Vec3 N = normals_[tri[0]] * b0 + normals_[tri[1]] * b1 + normals_[tri[2]] * b2;
+    const Vec3 N = !flatFrames_.empty() ? flatFrames_[prim].n
+                                        : normals_[tri[0]] * b0 + normals_[tri[1]] * b1 + normals_[tri[2]] * b2;
     // The geometric normal follows the side the shading normals point to (Mitsuba and pbrt-v3 §3.6.2), so
     // that vertex normals decide the orientation of smooth meshes. The sign needs no normalization of N.
     if (dot(ng, N) < 0) ng = -ng;
@@ -251,17 +265,16 @@ TriangleMesh::InverseChart TriangleMesh::inverseChart(uint32_t prim) const {
 
 void TriangleMesh::fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const {
     const Vec3 N = surfacePoint(prim, b1, b2, its.p, its.n, its.uv);
-    const double len = N.length();
-    const Vec3 ns = len > 0 ? N / len : its.n;
-    const auto &tri = triangles_[prim];
-    const Vec3 &p0 = positions_[tri[0]];
-    const Vec3 e1 = positions_[tri[1]] - p0, e2 = positions_[tri[2]] - p0;
-    const InverseChart j = inverseChart(prim);
-    its.dpdu = e1 * j.j00 + e2 * j.j10;
-    its.dpdv = e1 * j.j01 + e2 * j.j11;
+    its.dpdu = constants_[prim].dpdu;
+    its.dpdv = constants_[prim].dpdv;
     its.dndu = its.dndv = Vec3();
     its.normalDerivativesPending = !normals_.empty();
-    its.shFrame = Frame::fromNormalTangent(ns, its.dpdu);
+    if (!flatFrames_.empty()) {
+        its.shFrame = flatFrames_[prim];
+    } else {
+        const double len = N.length();
+        its.shFrame = Frame::fromNormalTangent(len > 0 ? N / len : its.n, its.dpdu);
+    }
     its.shape = this;
     its.primIndex = prim;
     its.primUV = Vec2(b1, b2);

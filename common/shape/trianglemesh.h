@@ -72,7 +72,7 @@ private:
     void transformInPlace(const Transform &toWorld);
     // Replaces the normals by per-crease smooth normals (maxSmoothAngle).
     void rebuildCreases(double maxAngleDeg);
-    // Recomputes the area distribution, total area and bounding box.
+    // Recomputes the area distribution, total area, bounding box and the per-triangle constants below.
     void updateSamplingData();
     // (j00 j01; j10 j11) = d(b1, b2)/d(u, v), the inverse Jacobian of triangle prim's texture chart (pbrt-v3
     // §3.6.2); the identity where the barycentric chart stands in.
@@ -83,6 +83,14 @@ private:
     // Point of triangle `prim` at barycentrics (b1, b2): position, geometric normal (on the side of the
     // vertex normals), uv; returns the interpolated vertex normal, not normalized (zero without normals).
     Vec3 surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Vec3 &ng, Vec2 &uv) const;
+    // What every hit and position sample on a triangle shares, whatever the point: its unit normal by the
+    // winding (before surfacePoint orients it) and its partials dp/du, dp/dv. Kept per triangle (72 bytes)
+    // instead of being recomputed at every hit, where a cross product, two square roots and two divisions
+    // took about a tenth of the path tracer's time on cornell-box (issue 17's profile); the values are
+    // computed by the same expressions as before, so hits are bit for bit the same.
+    struct TriangleConstants {
+        Vec3 ng, dpdu, dpdv;
+    };
     // The full hit at barycentrics (b1, b2): surfacePoint, partials and shading frame; dn/du and dn/dv are
     // left to fillNormalDerivatives.
     void fillSurface(uint32_t prim, double b1, double b2, Intersection &its) const;
@@ -90,6 +98,15 @@ private:
     std::vector<Vec3> positions_, normals_;
     std::vector<Vec2> uvs_;
     std::vector<std::array<uint32_t, 3>> triangles_;
+    std::vector<TriangleConstants> constants_;  // per triangle
+    // Flat-shaded meshes (no vertex normals, or the same normal at a triangle's three corners: rectangles,
+    // cubes, faceted models) have one shading frame per triangle, kept here (72 bytes per triangle; empty
+    // for meshes with any smooth triangle). A hit then skips the interpolation, normalization and
+    // Gram-Schmidt of the shading normal, two square roots and two divisions in a dependent chain. With
+    // equal corner normals the frame is the one hits computed before up to rounding (the interpolated
+    // normal n (b0 + b1 + b2) normalized is n), so bits may differ in the last place; without vertex
+    // normals it is the same expression, bit for bit.
+    std::vector<Frame> flatFrames_;
     Distribution1D areaDist_;
     AABB bbox_;
     double area_ = 0;
