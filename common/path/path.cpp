@@ -27,6 +27,7 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
     vertices_.clear();
     edges_.clear();
     lensHits_.clear();
+    endpointDirect_ = -1;
     // Room for typical walks up front: growing a vector of vertices one at a time shows in profiles.
     constexpr size_t kTypicalVertices = 16;
     vertices_.reserve(kTypicalVertices);
@@ -94,6 +95,11 @@ void Path::recordLensHit(const Scene &scene, int from, const PathEdge &edge, dou
     if (!hit.vertex.throughput.isBlack()) lensHits_.push_back(hit);
 }
 
+double Path::endpointDirectDensity(const Scene &scene) const {
+    if (endpointDirect_ < 0) endpointDirect_ = directDensity(scene, vertex(0), vertex(1));
+    return endpointDirect_;
+}
+
 int pathDepth(const PathView &path) {
     int depth = path.length() - 1;
     for (int i = 0; i + 1 < path.length(); ++i) depth += path.edge(i).crossings;
@@ -115,6 +121,7 @@ void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int 
     ownLightEnd_ = ownCameraEnd_ = false;
     junction_ = PathEdge();
     value_ = Spectrum(0.0);
+    directEmitter_ = directSensor_ = -1;
 }
 
 const PathVertex &JoinedPath::vertex(int i) const {
@@ -164,6 +171,7 @@ bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const P
     const double density = directDensity(scene, lightEnd_, cameraEnd_);
     if (!(density > 0)) return false;
     lightEnd_.throughput = supernode.eval(scene, nullptr, lightEnd_, TransportMode::Importance) / density;
+    directEmitter_ = density;
     return finishConnection(scene);
 }
 
@@ -189,6 +197,7 @@ bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Pa
     const double density = directDensity(scene, cameraEnd_, lightEnd_);
     if (!(density > 0)) return false;
     cameraEnd_.throughput = supernode.eval(scene, nullptr, cameraEnd_, TransportMode::Radiance) / density;
+    directSensor_ = density;
     return finishConnection(scene);
 }
 
@@ -197,13 +206,33 @@ bool JoinedPath::finishConnection(const Scene &scene) {
     const Vec3 toLight = normalize(lightEnd_.position() - cameraEnd_.position());
     // Light tracing lands wherever the connection enters the sensor.
     if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd_.position(), toLight, cameraEnd_.ps.uv)) return false;
-    const Spectrum fLight = lightEnd_.eval(scene, &vertex(a_ - 2), cameraEnd_, TransportMode::Importance);
-    if (fLight.isBlack()) return false;
-    const Spectrum fCamera = cameraEnd_.eval(scene, &vertex(a_ + 1), lightEnd_, TransportMode::Radiance);
-    if (fCamera.isBlack() || !pf::connect(scene, lightEnd_, cameraEnd_, junction_)) return false;
+    const PathVertex &lightPred = vertex(a_ - 2), &cameraPred = vertex(a_ + 1);
+    const PathVertex::ConnectionTerms light =
+        lightEnd_.evalConnection(scene, &lightPred, cameraEnd_, TransportMode::Importance);
+    if (light.f.isBlack()) return false;
+    const PathVertex::ConnectionTerms camera =
+        cameraEnd_.evalConnection(scene, &cameraPred, lightEnd_, TransportMode::Radiance);
+    if (camera.f.isBlack() || !pf::connect(scene, lightEnd_, cameraEnd_, junction_)) return false;
     value_ =
-        lightEnd_.throughput * fLight * edgeTerm(lightEnd_, cameraEnd_, junction_) * fCamera * cameraEnd_.throughput;
+        lightEnd_.throughput * light.f * edgeTerm(lightEnd_, cameraEnd_, junction_) * camera.f * cameraEnd_.throughput;
+    pRevJunction_[0] = cameraEnd_.areaDensity(camera.toSucc, lightEnd_, junction_, TransportMode::Radiance);
+    pFwdJunction_[0] = lightEnd_.areaDensity(light.toSucc, cameraEnd_, junction_, TransportMode::Importance);
+    if (a_ >= 2)
+        pRevJunction_[1] = lightEnd_.areaDensity(light.toPred, lightPred, edge(a_ - 2), TransportMode::Radiance);
+    if (b_ >= 2)
+        pFwdJunction_[1] = cameraEnd_.areaDensity(camera.toPred, cameraPred, edge(a_), TransportMode::Importance);
     return !value_.isBlack();
+}
+
+void JoinedPath::evalJunctionDensities(const Scene &scene) {
+    const int a = a_;
+    pRevJunction_[0] = vertex(a).evalPdf(scene, &vertex(a + 1), vertex(a - 1), edge(a - 1), TransportMode::Radiance);
+    pFwdJunction_[0] = vertex(a - 1).evalPdf(scene, &vertex(a - 2), vertex(a), edge(a - 1), TransportMode::Importance);
+    if (a >= 2)
+        pRevJunction_[1] =
+            vertex(a - 1).evalPdf(scene, &vertex(a), vertex(a - 2), edge(a - 2), TransportMode::Radiance);
+    if (b_ >= 2)
+        pFwdJunction_[1] = vertex(a).evalPdf(scene, &vertex(a - 1), vertex(a + 1), edge(a), TransportMode::Importance);
 }
 
 bool JoinedPath::hitEmitter(const Scene &scene, const Path &camera, int t) {
@@ -217,7 +246,9 @@ bool JoinedPath::hitEmitter(const Scene &scene, const Path &camera, int t) {
         supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
     value_ = lightEnd_.throughput * lightEnd_.eval(scene, &vertex(1), supernode, TransportMode::Radiance) *
              supernode.eval(scene, &lightEnd_, supernode, TransportMode::Radiance);
-    return !value_.isBlack();
+    if (value_.isBlack()) return false;
+    evalJunctionDensities(scene);
+    return true;
 }
 
 bool JoinedPath::hitLens(const Scene &scene, const Path &light, const LensHit &hit) {
@@ -229,27 +260,41 @@ bool JoinedPath::hitLens(const Scene &scene, const Path &light, const LensHit &h
     value_ = cameraEnd_.throughput *
              cameraEnd_.eval(scene, &light.vertex(hit.from), supernode, TransportMode::Importance) *
              supernode.eval(scene, &cameraEnd_, supernode, TransportMode::Importance);
-    return !value_.isBlack();
+    if (value_.isBlack()) return false;
+    evalJunctionDensities(scene);
+    return true;
 }
 
-void JoinedPath::densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const {
-    const int n = length(), imp = modeIndex(TransportMode::Importance), rad = modeIndex(TransportMode::Radiance);
-    pFwd.resize(static_cast<size_t>(n));
-    pRev.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-        pFwd[static_cast<size_t>(i)] = vertex(i).pdf[imp];
-        pRev[static_cast<size_t>(i)] = vertex(i).pdf[rad];
-    }
-    // The junction between x_{a-1} and x_a gives both ends new neighbours: p<- of the last two emitter-side
-    // vertices and p-> of the first two sensor-side ones change.
-    const int a = a_;
-    const auto at = [](int i) { return static_cast<size_t>(i); };
-    pRev[at(a - 1)] = vertex(a).evalPdf(scene, &vertex(a + 1), vertex(a - 1), edge(a - 1), TransportMode::Radiance);
-    if (a >= 2)
-        pRev[at(a - 2)] = vertex(a - 1).evalPdf(scene, &vertex(a), vertex(a - 2), edge(a - 2), TransportMode::Radiance);
-    pFwd[at(a)] = vertex(a - 1).evalPdf(scene, &vertex(a - 2), vertex(a), edge(a - 1), TransportMode::Importance);
-    if (a + 1 < n)
-        pFwd[at(a + 1)] = vertex(a).evalPdf(scene, &vertex(a - 1), vertex(a + 1), edge(a), TransportMode::Importance);
+void JoinedPath::densities(const Scene &scene, bool sampleDirect, PathDensities &d) const {
+    const int n = length(), a = a_, b = b_;
+    const size_t size = static_cast<size_t>(n);
+    d.pFwd.resize(size);
+    d.pRev.resize(size);
+    d.connectable.resize(size);
+    const int imp = modeIndex(TransportMode::Importance), rad = modeIndex(TransportMode::Radiance);
+    const auto put = [&](int i, const PathVertex &v) {
+        const size_t k = static_cast<size_t>(i);
+        d.pFwd[k] = v.pdf[imp];
+        d.pRev[k] = v.pdf[rad];
+        d.connectable[k] = v.isConnectable();
+    };
+    // The walks' vertices straight from the subpaths (x_i = light vertex i, x_{n-1-j} = sensor vertex j).
+    for (int i = 0; i + 1 < a; ++i) put(i, light_->vertex(i));
+    put(a - 1, ownLightEnd_ ? lightEnd_ : light_->vertex(a - 1));
+    put(a, ownCameraEnd_ ? cameraEnd_ : camera_->vertex(b - 1));
+    for (int j = b - 2; j >= 0; --j) put(n - 1 - j, camera_->vertex(j));
+    d.pRev[static_cast<size_t>(a - 1)] = pRevJunction_[0];
+    d.pFwd[static_cast<size_t>(a)] = pFwdJunction_[0];
+    if (a >= 2) d.pRev[static_cast<size_t>(a - 2)] = pRevJunction_[1];
+    if (b >= 2) d.pFwd[static_cast<size_t>(a + 1)] = pFwdJunction_[1];
+    d.directEmitter = d.directSensor = 0;
+    if (!sampleDirect || n < 3) return;
+    d.directEmitter = directEmitter_ >= 0 ? directEmitter_
+                      : a >= 2            ? light_->endpointDirectDensity(scene)
+                                          : directDensity(scene, vertex(0), vertex(1));
+    d.directSensor = directSensor_ >= 0 ? directSensor_
+                     : b >= 2           ? camera_->endpointDirectDensity(scene)
+                                        : directDensity(scene, vertex(n - 1), vertex(n - 2));
 }
 
 Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode) {

@@ -48,6 +48,10 @@ public:
     // The edge between vertex(i) and vertex(i + 1), i >= 0.
     const PathEdge &edge(int i) const { return edges_[static_cast<size_t>(i)]; }
     const std::vector<LensHit> &lensHits() const { return lensHits_; }
+    // directDensity of the endpoint node (vertex 0) from vertex 1 (size() >= 2): how the other walk's
+    // direct sampling (BDPT's s = 1 or t = 1) would produce it. Every strategy that keeps both vertices
+    // has it in its MIS weight, so it is computed once per walk, when first asked.
+    double endpointDirectDensity(const Scene &scene) const;
 
 private:
     void recordLensHit(const Scene &scene, int from, const PathEdge &edge, double survival);
@@ -56,6 +60,16 @@ private:
     std::vector<PathVertex> vertices_;
     std::vector<PathEdge> edges_;
     std::vector<LensHit> lensHits_;
+    mutable double endpointDirect_ = -1;  // endpointDirectDensity once known
+};
+
+// What the MIS weights of a complete path's strategies depend on (mis.h): p->(x_i) and p<-(x_i), whether a
+// connection can end at x_i, and the endpoint densities of direct sampling, directDensity of x_0 from x_1
+// and of x_{n-1} from x_{n-2} (zero where they take no part: without sampleDirect, or for n < 3).
+struct PathDensities {
+    std::vector<double> pFwd, pRev;
+    std::vector<char> connectable;
+    double directEmitter = 0, directSensor = 0;
 };
 
 // A complete path x_0 .. x_{n-1} in light order; vertex(-1) and vertex(n) are the supernodes.
@@ -107,14 +121,18 @@ public:
     const Spectrum &contribution() const { return value_; }
     // Where the path meets the film.
     const Vec2 &raster() const { return vertex(length() - 1).ps.uv; }
-    // The densities of every vertex as BDPT keeps them: those stored by the walks, and the four that the
-    // junction changes recomputed with EVALPDF (ALGORITHMS.md §1.4).
-    void densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const;
+    // The densities of every vertex as BDPT keeps them (ALGORITHMS.md §1.4): those stored by the walks,
+    // and the four that the junction changes, evaluated when the path was built. The direct densities
+    // are those of the builder's own direct sample, or of the walks (Path::endpointDirectDensity).
+    void densities(const Scene &scene, bool sampleDirect, PathDensities &d) const;
 
 private:
     void reset(const Path *light, int a, const Path *camera, int b, int s);
-    // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, and f / p.
+    // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, f / p,
+    // and the junction's densities.
     bool finishConnection(const Scene &scene);
+    // The junction's densities with EVALPDF, for the paths that end at an emitter or the lens.
+    void evalJunctionDensities(const Scene &scene);
 
     const Path *light_ = nullptr, *camera_ = nullptr;
     int a_ = 0, b_ = 0, s_ = 0;        // vertices taken from each side (including the ends below); strategy s
@@ -122,6 +140,10 @@ private:
     bool ownLightEnd_ = false, ownCameraEnd_ = false;
     PathEdge junction_;  // between vertex(a - 1) and vertex(a)
     Spectrum value_;
+    // What the junction changes: p<- of x_{a-1} and x_{a-2}, p-> of x_a and x_{a+1} (where they exist).
+    double pRevJunction_[2] = {0, 0}, pFwdJunction_[2] = {0, 0};
+    // directDensity of x_0 from x_1 and of x_{n-1} from x_{n-2} where a builder computed it; -1 otherwise.
+    double directEmitter_ = -1, directSensor_ = -1;
 };
 
 // Mitsuba's depth of a complete path: its edges plus the index-matched surfaces they cross. maxDepth
