@@ -91,7 +91,8 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     // of them), which only the built path knows. All strategies of a path share its depth, so the MIS
     // weights need no change.
     const auto report = [&](int s, int t) {
-        const int depth = pathDepth(path);
+        // Without pass-through surfaces no edge crosses one, and the depth is the s + t - 1 bounded above.
+        const int depth = scene.hasPassThroughSurfaces() ? pathDepth(path) : path.length() - 1;
         if (maxDepth_ >= 0 && depth > maxDepth_) return;
         path.densities(scene, mis_.sampleDirect, w.densities);
         const double weight = misWeight(w.densities, s, mis_);

@@ -139,21 +139,30 @@ const PathEdge &JoinedPath::edge(int i) const {
     return camera_->edge(length() - 2 - i);
 }
 
+void JoinedPath::setEnd(bool lightSide, const PathVertex &v, bool copy) {
+    bool &own = lightSide ? ownLightEnd_ : ownCameraEnd_;
+    own = copy || v.delta;
+    if (!own) return;
+    PathVertex &end = lightSide ? lightEnd_ : cameraEnd_;
+    end = v;
+    end.delta = false;
+}
+
 bool JoinedPath::connect(const Scene &scene, const Path &light, int s, const Path &camera, int t) {
     reset(&light, s, &camera, t, s);
-    lightEnd_ = light.vertex(s - 1);
-    cameraEnd_ = camera.vertex(t - 1);
-    ownLightEnd_ = ownCameraEnd_ = true;
-    return smoothAt(lightEnd_, TransportMode::Importance) && smoothAt(cameraEnd_, TransportMode::Radiance) &&
-           finishConnection(scene);
+    const PathVertex &l = light.vertex(s - 1), &c = camera.vertex(t - 1);
+    if (!smoothAt(l, TransportMode::Importance) || !smoothAt(c, TransportMode::Radiance)) return false;
+    setEnd(true, l, false);
+    setEnd(false, c, t == 1);  // light tracing sets the sensor node's raster position
+    return finishConnection(scene);
 }
 
 bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const Path &camera, int t) {
     reset(nullptr, 1, &camera, t, 1);
-    cameraEnd_ = camera.vertex(t - 1);
-    ownCameraEnd_ = true;
-    if (!smoothAt(cameraEnd_, TransportMode::Radiance)) return false;
-    DirectSample ds(cameraEnd_.position(), cameraEnd_.type == VertexType::Surface ? cameraEnd_.its.n : Vec3());
+    const PathVertex &c = camera.vertex(t - 1);
+    if (!smoothAt(c, TransportMode::Radiance)) return false;
+    setEnd(false, c, false);
+    DirectSample ds(c.position(), c.type == VertexType::Surface ? c.its.n : Vec3());
     scene.sampleEmitterDirect(ds, u);
     if (!(ds.pdf > 0) || !ds.object) return false;
     const auto *emitter = static_cast<const Emitter *>(ds.object);
@@ -168,7 +177,7 @@ bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const P
     const PathVertex &supernode = PathVertex::emitterSupernode();
     lightEnd_.pdf[modeIndex(TransportMode::Importance)] =
         supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
-    const double density = directDensity(scene, lightEnd_, cameraEnd_);
+    const double density = directDensity(scene, lightEnd_, c);
     if (!(density > 0)) return false;
     lightEnd_.throughput = supernode.eval(scene, nullptr, lightEnd_, TransportMode::Importance) / density;
     directEmitter_ = density;
@@ -177,11 +186,11 @@ bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const P
 
 bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Path &light, int s) {
     reset(&light, s, nullptr, 1, s);
-    lightEnd_ = light.vertex(s - 1);
-    ownLightEnd_ = true;
-    if (!smoothAt(lightEnd_, TransportMode::Importance)) return false;
+    const PathVertex &l = light.vertex(s - 1);
+    if (!smoothAt(l, TransportMode::Importance)) return false;
+    setEnd(true, l, false);
     const Sensor &sensor = scene.sensor();
-    DirectSample ds(lightEnd_.position(), lightEnd_.type == VertexType::Surface ? lightEnd_.its.n : Vec3());
+    DirectSample ds(l.position(), l.type == VertexType::Surface ? l.its.n : Vec3());
     sensor.sampleDirect(ds, u);
     if (!(ds.pdf > 0)) return false;
     PositionSample ps;
@@ -194,7 +203,7 @@ bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Pa
     const PathVertex &supernode = PathVertex::sensorSupernode();
     cameraEnd_.pdf[modeIndex(TransportMode::Radiance)] =
         supernode.evalPdf(scene, nullptr, cameraEnd_, kStatelessEdge, TransportMode::Radiance);
-    const double density = directDensity(scene, cameraEnd_, lightEnd_);
+    const double density = directDensity(scene, cameraEnd_, l);
     if (!(density > 0)) return false;
     cameraEnd_.throughput = supernode.eval(scene, nullptr, cameraEnd_, TransportMode::Radiance) / density;
     directSensor_ = density;
@@ -202,25 +211,24 @@ bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Pa
 }
 
 bool JoinedPath::finishConnection(const Scene &scene) {
-    lightEnd_.delta = cameraEnd_.delta = false;
-    const Vec3 toLight = normalize(lightEnd_.position() - cameraEnd_.position());
-    // Light tracing lands wherever the connection enters the sensor.
-    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd_.position(), toLight, cameraEnd_.ps.uv)) return false;
+    const PathVertex &lightEnd = vertex(a_ - 1), &cameraEnd = vertex(a_);
+    const Vec3 toLight = normalize(lightEnd.position() - cameraEnd.position());
+    // Light tracing lands wherever the connection enters the sensor (b = 1: the sensor node is a copy).
+    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd.position(), toLight, cameraEnd_.ps.uv)) return false;
     const PathVertex &lightPred = vertex(a_ - 2), &cameraPred = vertex(a_ + 1);
     const PathVertex::ConnectionTerms light =
-        lightEnd_.evalConnection(scene, &lightPred, cameraEnd_, TransportMode::Importance);
+        lightEnd.evalConnection(scene, &lightPred, cameraEnd, TransportMode::Importance);
     if (light.f.isBlack()) return false;
     const PathVertex::ConnectionTerms camera =
-        cameraEnd_.evalConnection(scene, &cameraPred, lightEnd_, TransportMode::Radiance);
-    if (camera.f.isBlack() || !pf::connect(scene, lightEnd_, cameraEnd_, junction_)) return false;
-    value_ =
-        lightEnd_.throughput * light.f * edgeTerm(lightEnd_, cameraEnd_, junction_) * camera.f * cameraEnd_.throughput;
-    pRevJunction_[0] = cameraEnd_.areaDensity(camera.toSucc, lightEnd_, junction_, TransportMode::Radiance);
-    pFwdJunction_[0] = lightEnd_.areaDensity(light.toSucc, cameraEnd_, junction_, TransportMode::Importance);
+        cameraEnd.evalConnection(scene, &cameraPred, lightEnd, TransportMode::Radiance);
+    if (camera.f.isBlack() || !pf::connect(scene, lightEnd, cameraEnd, junction_)) return false;
+    value_ = lightEnd.throughput * light.f * edgeTerm(lightEnd, cameraEnd, junction_) * camera.f * cameraEnd.throughput;
+    pRevJunction_[0] = cameraEnd.areaDensity(camera.toSucc, lightEnd, junction_, TransportMode::Radiance);
+    pFwdJunction_[0] = lightEnd.areaDensity(light.toSucc, cameraEnd, junction_, TransportMode::Importance);
     if (a_ >= 2)
-        pRevJunction_[1] = lightEnd_.areaDensity(light.toPred, lightPred, edge(a_ - 2), TransportMode::Radiance);
+        pRevJunction_[1] = lightEnd.areaDensity(light.toPred, lightPred, edge(a_ - 2), TransportMode::Radiance);
     if (b_ >= 2)
-        pFwdJunction_[1] = cameraEnd_.areaDensity(camera.toPred, cameraPred, edge(a_), TransportMode::Importance);
+        pFwdJunction_[1] = cameraEnd.areaDensity(camera.toPred, cameraPred, edge(a_), TransportMode::Importance);
     return !value_.isBlack();
 }
 

@@ -128,6 +128,11 @@ public:
 
 private:
     void reset(const Path *light, int a, const Path *camera, int b, int s);
+    // Makes walk vertex v the junction's light (or sensor) end. The junction's ends are smooth vertices of
+    // the joined path: one that left its walk through a Dirac lobe is copied with that flag cleared, as is
+    // one the connection changes (`copy`); the others are used in place, since copying every end showed
+    // in profiles (issue 17).
+    void setEnd(bool lightSide, const PathVertex &v, bool copy);
     // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, f / p,
     // and the junction's densities.
     bool finishConnection(const Scene &scene);

@@ -95,7 +95,7 @@ Ray PathVertex::spawnRay(const Scene &scene, const Vec3 &d) const {
     return Ray(its.p, d);
 }
 
-void PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi,
+bool PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi,
                                  Vec3 &wo) const {
     if (delta) {
         // Rebuilt from positions, a direction is tilted by the offset of the ray origin (Scene::spawnRay)
@@ -104,10 +104,13 @@ void PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ,
         const bool forward = mode == walkMode;
         wi = forward ? its.wi : woLocal;
         wo = forward ? woLocal : its.wi;
-        return;
+        return sidesAgree(its, wi, wo);
     }
-    wi = its.toLocal(normalize(pred.position() - position()));
-    wo = its.toLocal(normalize(succ.position() - position()));
+    // The side test on the world directions themselves (sameSide without the round trip to the local frame).
+    const Vec3 toPred = normalize(pred.position() - position()), toSucc = normalize(succ.position() - position());
+    wi = its.toLocal(toPred);
+    wo = its.toLocal(toSucc);
+    return dot(toPred, its.n) * wi.z > 0 && dot(toSucc, its.n) * wo.z > 0;
 }
 
 Spectrum PathVertex::endpointProfile(const Scene &scene, const Vec3 &target) const {
@@ -246,8 +249,7 @@ Spectrum PathVertex::eval(const Scene &scene, const PathVertex *pred, const Path
         }
         case VertexType::Surface: {
             Vec3 wi, wo;
-            localDirections(*pred, succ, mode, wi, wo);
-            if (!sidesAgree(its, wi, wo)) return Spectrum(0.0);
+            if (!localDirections(*pred, succ, mode, wi, wo)) return Spectrum(0.0);
             Spectrum f =
                 its.bsdf()->eval(BSDFContext(mode), its, wi, wo, delta ? Measure::Discrete : Measure::SolidAngle);
             if (mode == TransportMode::Importance) f *= shadingNormalCorrection(its, its.toWorld(wo), its.toWorld(wi));
@@ -285,8 +287,7 @@ double PathVertex::directionPdf(const Scene &scene, const PathVertex *pred, cons
         }
         case VertexType::Surface: {
             Vec3 wi, wo;
-            localDirections(*pred, succ, mode, wi, wo);
-            if (!sidesAgree(its, wi, wo)) return 0.0;
+            if (!localDirections(*pred, succ, mode, wi, wo)) return 0.0;
             return its.bsdf()->pdf(BSDFContext(mode), its, wi, wo, delta ? Measure::Discrete : Measure::SolidAngle);
         }
         case VertexType::Medium:
@@ -320,8 +321,7 @@ PathVertex::ConnectionTerms PathVertex::evalConnection(const Scene &scene, const
     // As eval and directionPdf compute them, with the local directions and the side test shared: the
     // reverse density swaps wi and wo (a connection's end is never delta, so both come from positions).
     Vec3 wi, wo;
-    localDirections(*pred, succ, mode, wi, wo);
-    if (!sidesAgree(its, wi, wo)) return c;
+    if (!localDirections(*pred, succ, mode, wi, wo)) return c;
     const BSDF *bsdf = its.bsdf();
     c.f = bsdf->eval(BSDFContext(mode), its, wi, wo, Measure::SolidAngle);
     if (c.f.isBlack()) return c;

@@ -121,8 +121,9 @@ private:
     // vertex.
     double directionPdf(const Scene &scene, const PathVertex *pred, const PathVertex &succ, TransportMode mode) const;
     // Local (shading-frame) directions towards pred and succ; Dirac vertices keep the directions they
-    // were sampled with (see vertex.cpp).
-    void localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi, Vec3 &wo) const;
+    // were sampled with (see vertex.cpp). Returns whether both lie on the side where the geometric and the
+    // shading normal agree (f is zero otherwise, see above).
+    bool localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi, Vec3 &wo) const;
     Spectrum endpointProfile(const Scene &scene, const Vec3 &d) const;
     Ray spawnRay(const Scene &scene, const Vec3 &d) const;
 };
