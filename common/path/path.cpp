@@ -46,11 +46,13 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
     // Edges so far plus the index-matched surfaces they crossed: the walk's depth in Mitsuba's count.
     int depth = 0;
     for (int k = 0; maxVertices < 0 || depth + 1 < maxVertices; ++k) {
-        // Russian roulette on the throughput gathered since the endpoint, from rrDepth + 1 edges on, as
-        // the path tracer does it. The survival probability divides the next vertex's throughput; MIS
-        // ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
+        // Russian roulette on the throughput gathered since the endpoint, before the walk's edge rrDepth
+        // (depth rrDepth - 1 so far), as Mitsuba's bidirectional walks start it (libbidir/path.cpp,
+        // alternatingRandomWalkFromPixel: the sensor walk's vertex count t >= rrDepth, the emitter walk's
+        // step s >= rrDepth), never before the first edge. The survival probability divides the next
+        // vertex's throughput; MIS ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
         double survival = 1.0;
-        if (depth > rrDepth) {
+        if (depth >= 1 && depth + 1 >= rrDepth) {
             survival = std::min((vertices_.back().throughput / start).max(), 0.95);
             if (sampler.next1D() >= survival) break;
         }
@@ -122,21 +124,6 @@ void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int 
     junction_ = PathEdge();
     value_ = Spectrum(0.0);
     directEmitter_ = directSensor_ = -1;
-}
-
-const PathVertex &JoinedPath::vertex(int i) const {
-    const int n = length();
-    if (i < 0) return PathVertex::emitterSupernode();
-    if (i >= n) return PathVertex::sensorSupernode();
-    if (i < a_) return i == a_ - 1 && ownLightEnd_ ? lightEnd_ : light_->vertex(i);
-    const int j = n - 1 - i;
-    return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
-}
-
-const PathEdge &JoinedPath::edge(int i) const {
-    if (i < a_ - 1) return light_->edge(i);
-    if (i == a_ - 1) return junction_;
-    return camera_->edge(length() - 2 - i);
 }
 
 void JoinedPath::setEnd(bool lightSide, const PathVertex &v, bool copy) {

@@ -8,7 +8,7 @@
 //
 // Random numbers: a walk draws from its sampler in vertex order (vertex.h lists the count per vertex),
 // so a subpath is a pure function of the sampler's stream and its first k vertices do not depend on
-// how long the walk runs. Russian roulette draws one more number per vertex from rrDepth edges on.
+// how long the walk runs. Russian roulette draws one more number before each edge from edge rrDepth on.
 //
 // Depth, as Mitsuba 0.6 counts it for maxDepth and rrDepth: the edges of a path plus the index-matched
 // surfaces they cross (edge.h), since Mitsuba's walks make a vertex of every such crossing
@@ -34,7 +34,7 @@ class Path {
 public:
     // Samples a walk of `mode` (Importance: from the emitters; Radiance: from the sensor, through raster
     // position `raster`) with at most maxVertices vertices (-1: unbounded) besides the supernode, and
-    // Russian roulette once the walk has rrDepth edges, both counted with the crossings of index-matched
+    // Russian roulette from its edge rrDepth on (as Mitsuba's bdpt), both counted with the crossings of index-matched
     // surfaces (a walk's depth + 1 vertices at most). The emitter walk records where it crosses a finite
     // lens. Along the way each vertex gets its reverse density (p of the other walk) as soon as its two
     // successors are known (ALGORITHMS.md §1.4).
@@ -112,8 +112,20 @@ public:
     bool hitLens(const Scene &scene, const Path &light, const LensHit &hit);
 
     int length() const override { return a_ + b_; }
-    const PathVertex &vertex(int i) const override;
-    const PathEdge &edge(int i) const override;
+    // Inline: the connection and the MIS weights read the path's vertices many times per strategy.
+    const PathVertex &vertex(int i) const override {
+        const int n = length();
+        if (i < 0) return PathVertex::emitterSupernode();
+        if (i >= n) return PathVertex::sensorSupernode();
+        if (i < a_) return i == a_ - 1 && ownLightEnd_ ? lightEnd_ : light_->vertex(i);
+        const int j = n - 1 - i;
+        return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
+    }
+    const PathEdge &edge(int i) const override {
+        if (i < a_ - 1) return light_->edge(i);
+        if (i == a_ - 1) return junction_;
+        return camera_->edge(length() - 2 - i);
+    }
     // s and t of the strategy that built the path.
     int lightVertices() const { return s_; }
     int sensorVertices() const { return length() - s_; }
