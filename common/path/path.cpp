@@ -57,19 +57,22 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
             if (sampler.next1D() >= survival) break;
         }
         const size_t cur = vertices_.size() - 1;
-        PathVertex succ;
         PathEdge edge;
+        // The successor is sampled in place (a copy of every vertex into the walk showed in profiles) and
+        // dropped again if the walk ends before it.
+        PathVertex &succ = vertices_.emplace_back();
         const bool sampled = vertices_[cur].sampleNext(scene, sampler, mode, &vertices_[cur - 1], edge, succ);
         if (lens && !edge.d.isZero()) recordLensHit(scene, k, edge, survival);
-        if (!sampled) break;
         depth += 1 + edge.crossings;
         // A vertex beyond maxDepth belongs to no path that may contribute (its prefix is already too deep).
-        if (maxVertices >= 0 && depth + 1 > maxVertices) break;
+        if (!sampled || (maxVertices >= 0 && depth + 1 > maxVertices)) {
+            vertices_.pop_back();
+            break;
+        }
         succ.throughput *= 1.0 / survival;
         if (k >= 1)
             vertices_[cur - 1].pdf[reverse] = vertices_[cur].evalPdf(
                 scene, &succ, vertices_[cur - 1], edges_[static_cast<size_t>(k - 1)], otherMode(mode));
-        vertices_.push_back(succ);
         edges_.push_back(edge);
         if (succ.isEndpointNode()) break;  // the sensor walk reached the environment's sphere: it ends there
     }
