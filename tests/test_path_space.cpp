@@ -392,13 +392,17 @@ std::string kitchenSinkScene(const std::string &sky) {
 }
 
 // Random paths as BDPT samples them (small films, the scene's maxDepth, at most 8). Russian roulette is
-// off: its survival probabilities divide the walks' throughputs but are no part of f / p.
-void checkRandomPaths(Scene &scene) {
+// off: its survival probabilities divide the walks' throughputs but are no part of f / p. `options` sets
+// further BDPT parameters (the strategy set and the heuristic that the weights depend on).
+void checkRandomPaths(Scene &scene, const std::vector<std::pair<std::string, bool>> &options = {},
+                      const std::string &heuristic = "power") {
     scene.resizeFilm(8, 8);
     const int64_t depth = scene.integratorProperties().getInt("maxDepth", -1);
     Properties props(ObjectKind::Integrator, "bdpt", {});
     props.set("maxDepth", Properties::Type::Integer, depth < 0 ? int64_t(8) : std::min<int64_t>(depth, 8), {});
     props.set("rrDepth", Properties::Type::Integer, int64_t(100), {});
+    for (const auto &[name, value] : options) props.set(name, Properties::Type::Boolean, value, {});
+    props.set("heuristic", Properties::Type::String, heuristic, {});
     const BDPT bdpt(props);
     int paths = 0, identities = 0;
     std::vector<double> pFwd, pRev;
@@ -480,6 +484,15 @@ TEST_P(SharedScenePaths, MisWeightsSumToOne) {
 TEST(PathSpace, KitchenSinkPathsMisWeightsSumToOne) {
     auto scene = loadScene(writeFile(tempDir("path-space-sink"), "scene.xml", kitchenSinkScene("constant")));
     checkRandomPaths(*scene);
+}
+
+// The same with the other strategy sets and the balance heuristic: BDPT's weights, from the densities it
+// keeps, against the explicit densities of each strategy.
+TEST(PathSpace, KitchenSinkWeightsForEveryStrategySet) {
+    auto scene = loadScene(writeFile(tempDir("path-space-sets"), "scene.xml", kitchenSinkScene("constant")));
+    checkRandomPaths(*scene, {{"sampleDirect", false}});
+    checkRandomPaths(*scene, {{"lightImage", false}});
+    checkRandomPaths(*scene, {{"sampleDirect", false}, {"lightImage", false}}, "balance");
 }
 
 // Parallel light (a delta direction): the s = 1 strategy exists only through direct sampling.
