@@ -392,16 +392,21 @@ std::string kitchenSinkScene(const std::string &sky) {
 }
 
 // Random paths as BDPT samples them (small films, the scene's maxDepth, at most 8). Russian roulette is
-// off: its survival probabilities divide the walks' throughputs but are no part of f / p.
-void checkRandomPaths(Scene &scene) {
+// off: its survival probabilities divide the walks' throughputs but are no part of f / p. `options` sets
+// further BDPT parameters (the strategy set and the heuristic that the weights depend on).
+void checkRandomPaths(Scene &scene, const std::vector<std::pair<std::string, bool>> &options = {},
+                      const std::string &heuristic = "power") {
     scene.resizeFilm(8, 8);
     const int64_t depth = scene.integratorProperties().getInt("maxDepth", -1);
     Properties props(ObjectKind::Integrator, "bdpt", {});
     props.set("maxDepth", Properties::Type::Integer, depth < 0 ? int64_t(8) : std::min<int64_t>(depth, 8), {});
     props.set("rrDepth", Properties::Type::Integer, int64_t(100), {});
+    for (const auto &[name, value] : options) props.set(name, Properties::Type::Boolean, value, {});
+    props.set("heuristic", Properties::Type::String, heuristic, {});
     const BDPT bdpt(props);
     int paths = 0, identities = 0;
-    std::vector<double> pFwd, pRev, storedFwd, storedRev;
+    std::vector<double> pFwd, pRev;
+    PathDensities stored;
     for (uint64_t pixel = 0; pixel < 64; ++pixel)
         for (uint64_t index = 0; index < 4; ++index) {
             IndependentSampler sampler(21, pixel, index);
@@ -417,14 +422,23 @@ void checkRandomPaths(Scene &scene) {
                 for (int i = 1; i + 1 < n; ++i)
                     EXPECT_FALSE(full.vertex(i).isEndpointNode() || full.vertex(i).isSupernode());
                 evalDensities(scene, full, pFwd, pRev);
-                x.path->densities(scene, storedFwd, storedRev);
-                for (int i = 0; i < n; ++i) {
-                    EXPECT_EQ(storedFwd[static_cast<size_t>(i)], pFwd[static_cast<size_t>(i)])
-                        << "p->(x_" << i << ") s=" << s << " t=" << x.t;
-                    EXPECT_EQ(storedRev[static_cast<size_t>(i)], pRev[static_cast<size_t>(i)])
-                        << "p<-(x_" << i << ") s=" << s << " t=" << x.t;
-                }
                 const MISOptions &opt = bdpt.misOptions();
+                // What BDPT keeps and caches (the junction's densities from the connection, the direct
+                // densities from the walks or the direct sample) is what EVALPDF and directDensity give.
+                x.path->densities(scene, opt.sampleDirect, stored);
+                for (int i = 0; i < n; ++i) {
+                    EXPECT_EQ(stored.pFwd[static_cast<size_t>(i)], pFwd[static_cast<size_t>(i)])
+                        << "p->(x_" << i << ") s=" << s << " t=" << x.t;
+                    EXPECT_EQ(stored.pRev[static_cast<size_t>(i)], pRev[static_cast<size_t>(i)])
+                        << "p<-(x_" << i << ") s=" << s << " t=" << x.t;
+                    EXPECT_EQ(stored.connectable[static_cast<size_t>(i)] != 0, full.vertex(i).isConnectable());
+                }
+                if (opt.sampleDirect && n >= 3) {
+                    EXPECT_EQ(stored.directEmitter, directDensity(scene, full.vertex(0), full.vertex(1)))
+                        << "s=" << s << " t=" << x.t;
+                    EXPECT_EQ(stored.directSensor, directDensity(scene, full.vertex(n - 1), full.vertex(n - 2)))
+                        << "s=" << s << " t=" << x.t;
+                }
                 const std::vector<double> p = strategyDensities(scene, full, pFwd, pRev, opt);
                 ASSERT_GT(p[static_cast<size_t>(s)], 0.0) << "the strategy that produced the path must be possible";
                 double sumPow = 0, sumWeights = 0;
@@ -470,6 +484,15 @@ TEST_P(SharedScenePaths, MisWeightsSumToOne) {
 TEST(PathSpace, KitchenSinkPathsMisWeightsSumToOne) {
     auto scene = loadScene(writeFile(tempDir("path-space-sink"), "scene.xml", kitchenSinkScene("constant")));
     checkRandomPaths(*scene);
+}
+
+// The same with the other strategy sets and the balance heuristic: BDPT's weights, from the densities it
+// keeps, against the explicit densities of each strategy.
+TEST(PathSpace, KitchenSinkWeightsForEveryStrategySet) {
+    auto scene = loadScene(writeFile(tempDir("path-space-sets"), "scene.xml", kitchenSinkScene("constant")));
+    checkRandomPaths(*scene, {{"sampleDirect", false}});
+    checkRandomPaths(*scene, {{"lightImage", false}});
+    checkRandomPaths(*scene, {{"sampleDirect", false}, {"lightImage", false}}, "balance");
 }
 
 // Parallel light (a delta direction): the s = 1 strategy exists only through direct sampling.

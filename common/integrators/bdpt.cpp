@@ -22,7 +22,7 @@ struct Workspace {
     Path camera, light;
     JoinedPath path;
     std::vector<Vec2> emitterDirect, sensorDirect;
-    std::vector<double> pFwd, pRev;
+    PathDensities densities;
     bool busy = false;
 };
 
@@ -73,7 +73,6 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     Path &camera = w.camera, &light = w.light;
     JoinedPath &path = w.path;
     std::vector<Vec2> &emitterDirect = w.emitterDirect, &sensorDirect = w.sensorDirect;
-    std::vector<double> &pFwd = w.pFwd, &pRev = w.pRev;
     camera.sample(scene, sampler, TransportMode::Radiance, maxVertices, rrDepth_, raster);
     light.sample(scene, sampler, TransportMode::Importance, maxVertices, rrDepth_);
     emitterDirect.clear();
@@ -92,10 +91,11 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     // of them), which only the built path knows. All strategies of a path share its depth, so the MIS
     // weights need no change.
     const auto report = [&](int s, int t) {
-        const int depth = pathDepth(path);
+        // Without pass-through surfaces no edge crosses one, and the depth is the s + t - 1 bounded above.
+        const int depth = scene.hasPassThroughSurfaces() ? pathDepth(path) : path.length() - 1;
         if (maxDepth_ >= 0 && depth > maxDepth_) return;
-        path.densities(scene, pFwd, pRev);
-        const double weight = misWeight(scene, path, s, pFwd, pRev, mis_);
+        path.densities(scene, mis_.sampleDirect, w.densities);
+        const double weight = misWeight(w.densities, s, mis_);
         visit({s, t, depth, path.raster(), weight, path.contribution() * weight, &path});
     };
     for (int t = 1; t <= camera.size(); ++t)

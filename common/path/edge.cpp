@@ -68,7 +68,15 @@ double failureProbability(const Medium &medium, const Ray &segment) {
 // points where the walk meets surfaces, not the offset origins of the spawned rays (as in visibility.cpp).
 WalkEnd walk(const Scene &scene, Sampler *sampler, Ray ray, Vec3 start, const Medium *medium, const Vec3 *target,
              Spectrum &T, SegmentDensities &densities, EdgeEnd &end, int &crossings) {
-    for (crossings = 0; crossings < kMaxCrossings; ++crossings) {
+    crossings = 0;
+    // A connection in vacuum through a scene without pass-through surfaces has nothing to cross: an
+    // occlusion query answers it without building the hit's surface point and frame (issue 17).
+    if (target && !medium && !scene.hasPassThroughSurfaces()) {
+        if (scene.occluded(ray)) return WalkEnd::Blocked;
+        densities.add(nullptr, Ray(start, ray.d, 0.0, (*target - start).length()), 1.0);
+        return WalkEnd::Reached;
+    }
+    for (; crossings < kMaxCrossings; ++crossings) {
         Intersection its;
         const bool hit = scene.intersect(ray, its);
         const double length = hit ? (its.p - start).length() : target ? (*target - start).length() : kInfinity;

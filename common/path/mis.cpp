@@ -9,13 +9,8 @@ namespace {
 // The strategy set of one path: which strategies exist and the endpoint densities of direct sampling.
 class Strategies {
 public:
-    Strategies(const Scene &scene, const PathView &path, const MISOptions &options)
-        : path_(path), options_(options), n_(path.length()) {
-        if (options.sampleDirect && n_ >= 3) {
-            directEmitter_ = directDensity(scene, path.vertex(0), path.vertex(1));
-            directSensor_ = directDensity(scene, path.vertex(n_ - 1), path.vertex(n_ - 2));
-        }
-    }
+    Strategies(const PathDensities &d, const MISOptions &options)
+        : d_(d), options_(options), n_(static_cast<int>(d.pFwd.size())) {}
 
     int count() const { return n_ + 1; }
     bool directEmitter(int r) const { return options_.sampleDirect && r == 1 && n_ - r >= 2; }
@@ -23,38 +18,52 @@ public:
     bool possible(int r) const {
         if (!options_.lightImage && r >= n_ - 1) return false;
         if (r == 0 || r == n_) return true;  // hitting an emitter or the lens: the density decides
-        return (directEmitter(r) || path_.vertex(r - 1).isConnectable()) &&
-               (directSensor(r) || path_.vertex(r).isConnectable());
+        return (directEmitter(r) || d_.connectable[static_cast<size_t>(r - 1)]) &&
+               (directSensor(r) || d_.connectable[static_cast<size_t>(r)]);
     }
     // p_r divided by the plain product of p-> and p<- (which uses the walks' endpoint densities).
-    double endpointFactor(int r, const std::vector<double> &pFwd, const std::vector<double> &pRev) const {
+    double endpointFactor(int r) const {
         double factor = 1.0;
-        if (directEmitter(r)) factor *= directEmitter_ / pFwd.front();
-        if (directSensor(r)) factor *= directSensor_ / pRev.back();
+        if (directEmitter(r)) factor *= d_.directEmitter / d_.pFwd.front();
+        if (directSensor(r)) factor *= d_.directSensor / d_.pRev.back();
         return factor;
     }
-    double direct(bool emitterSide) const { return emitterSide ? directEmitter_ : directSensor_; }
+    double direct(bool emitterSide) const { return emitterSide ? d_.directEmitter : d_.directSensor; }
 
 private:
-    const PathView &path_;
+    const PathDensities &d_;
     const MISOptions &options_;
     int n_;
-    double directEmitter_ = 0, directSensor_ = 0;
 };
 
 // x^beta, with the two heuristics of MISOptions spelt out (pow is a measurable cost here).
 double heuristicPower(double x, double beta) { return beta == 2.0 ? x * x : beta == 1.0 ? x : std::pow(x, beta); }
 
+// PathDensities of any path from its p-> and p<-: connectability from its vertices, direct densities
+// with directDensity.
+PathDensities gather(const Scene &scene, const PathView &path, const std::vector<double> &pFwd,
+                     const std::vector<double> &pRev, const MISOptions &options) {
+    PathDensities d;
+    d.pFwd = pFwd;
+    d.pRev = pRev;
+    const int n = path.length();
+    for (int i = 0; i < n; ++i) d.connectable.push_back(path.vertex(i).isConnectable());
+    if (options.sampleDirect && n >= 3) {
+        d.directEmitter = directDensity(scene, path.vertex(0), path.vertex(1));
+        d.directSensor = directDensity(scene, path.vertex(n - 1), path.vertex(n - 2));
+    }
+    return d;
+}
+
 }  // namespace
 
-double misWeight(const Scene &scene, const PathView &path, int s, const std::vector<double> &pFwd,
-                 const std::vector<double> &pRev, const MISOptions &options) {
-    const Strategies strategies(scene, path, options);
-    const double self = strategies.endpointFactor(s, pFwd, pRev);
+double misWeight(const PathDensities &d, int s, const MISOptions &options) {
+    const Strategies strategies(d, options);
+    const std::vector<double> &pFwd = d.pFwd, &pRev = d.pRev;
+    const double self = strategies.endpointFactor(s);
     const auto term = [&](int r, double ratio) {
-        return strategies.possible(r)
-                   ? heuristicPower(ratio * strategies.endpointFactor(r, pFwd, pRev) / self, options.exponent)
-                   : 0.0;
+        return strategies.possible(r) ? heuristicPower(ratio * strategies.endpointFactor(r) / self, options.exponent)
+                                      : 0.0;
     };
     double sum = 1.0;
     // p_r / p_{r+1} = p<-(x_r) / p->(x_r): moving the junction towards the emitter.
@@ -72,9 +81,15 @@ double misWeight(const Scene &scene, const PathView &path, int s, const std::vec
     return 1.0 / sum;
 }
 
+double misWeight(const Scene &scene, const PathView &path, int s, const std::vector<double> &pFwd,
+                 const std::vector<double> &pRev, const MISOptions &options) {
+    return misWeight(gather(scene, path, pFwd, pRev, options), s, options);
+}
+
 std::vector<double> strategyDensities(const Scene &scene, const PathView &path, const std::vector<double> &pFwd,
                                       const std::vector<double> &pRev, const MISOptions &options) {
-    const Strategies strategies(scene, path, options);
+    const PathDensities d = gather(scene, path, pFwd, pRev, options);
+    const Strategies strategies(d, options);
     const int n = path.length();
     std::vector<double> p(static_cast<size_t>(strategies.count()), 0.0);
     for (int r = 0; r <= n; ++r) {

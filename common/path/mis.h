@@ -24,8 +24,11 @@ struct MISOptions {
     bool lightImage = true;    // the strategies that land on other pixels (t = n - r <= 1) take part
 };
 
-// The weight of strategy s for the path, from its densities (as BDPT keeps them, JoinedPath::densities,
-// or as EVALPDF gives them, evalDensities), computed with running ratios p_r / p_s outwards from s.
+// The weight of strategy s for a path with densities d (as BDPT keeps them, JoinedPath::densities),
+// computed with running ratios p_r / p_s outwards from s.
+double misWeight(const PathDensities &d, int s, const MISOptions &options);
+// The same from p-> and p<- alone (e.g. as EVALPDF gives them, evalDensities): the rest of
+// PathDensities is taken from the path's vertices.
 double misWeight(const Scene &scene, const PathView &path, int s, const std::vector<double> &pFwd,
                  const std::vector<double> &pRev, const MISOptions &options);
 

@@ -27,6 +27,7 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
     vertices_.clear();
     edges_.clear();
     lensHits_.clear();
+    endpointDirect_ = -1;
     // Room for typical walks up front: growing a vector of vertices one at a time shows in profiles.
     constexpr size_t kTypicalVertices = 16;
     vertices_.reserve(kTypicalVertices);
@@ -45,28 +46,33 @@ void Path::sample(const Scene &scene, Sampler &sampler, TransportMode mode, int 
     // Edges so far plus the index-matched surfaces they crossed: the walk's depth in Mitsuba's count.
     int depth = 0;
     for (int k = 0; maxVertices < 0 || depth + 1 < maxVertices; ++k) {
-        // Russian roulette on the throughput gathered since the endpoint, from rrDepth + 1 edges on, as
-        // the path tracer does it. The survival probability divides the next vertex's throughput; MIS
-        // ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
+        // Russian roulette on the throughput gathered since the endpoint, before the walk's edge rrDepth
+        // (depth rrDepth - 1 so far), as Mitsuba's bidirectional walks start it (libbidir/path.cpp,
+        // alternatingRandomWalkFromPixel: the sensor walk's vertex count t >= rrDepth, the emitter walk's
+        // step s >= rrDepth), never before the first edge. The survival probability divides the next
+        // vertex's throughput; MIS ignores it (Veach 1997 §10.3.3), which keeps the weights summing to one.
         double survival = 1.0;
-        if (depth > rrDepth) {
+        if (depth >= 1 && depth + 1 >= rrDepth) {
             survival = std::min((vertices_.back().throughput / start).max(), 0.95);
             if (sampler.next1D() >= survival) break;
         }
         const size_t cur = vertices_.size() - 1;
-        PathVertex succ;
         PathEdge edge;
+        // The successor is sampled in place (a copy of every vertex into the walk showed in profiles) and
+        // dropped again if the walk ends before it.
+        PathVertex &succ = vertices_.emplace_back();
         const bool sampled = vertices_[cur].sampleNext(scene, sampler, mode, &vertices_[cur - 1], edge, succ);
         if (lens && !edge.d.isZero()) recordLensHit(scene, k, edge, survival);
-        if (!sampled) break;
         depth += 1 + edge.crossings;
         // A vertex beyond maxDepth belongs to no path that may contribute (its prefix is already too deep).
-        if (maxVertices >= 0 && depth + 1 > maxVertices) break;
+        if (!sampled || (maxVertices >= 0 && depth + 1 > maxVertices)) {
+            vertices_.pop_back();
+            break;
+        }
         succ.throughput *= 1.0 / survival;
         if (k >= 1)
             vertices_[cur - 1].pdf[reverse] = vertices_[cur].evalPdf(
                 scene, &succ, vertices_[cur - 1], edges_[static_cast<size_t>(k - 1)], otherMode(mode));
-        vertices_.push_back(succ);
         edges_.push_back(edge);
         if (succ.isEndpointNode()) break;  // the sensor walk reached the environment's sphere: it ends there
     }
@@ -94,6 +100,11 @@ void Path::recordLensHit(const Scene &scene, int from, const PathEdge &edge, dou
     if (!hit.vertex.throughput.isBlack()) lensHits_.push_back(hit);
 }
 
+double Path::endpointDirectDensity(const Scene &scene) const {
+    if (endpointDirect_ < 0) endpointDirect_ = directDensity(scene, vertex(0), vertex(1));
+    return endpointDirect_;
+}
+
 int pathDepth(const PathView &path) {
     int depth = path.length() - 1;
     for (int i = 0; i + 1 < path.length(); ++i) depth += path.edge(i).crossings;
@@ -115,38 +126,33 @@ void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int 
     ownLightEnd_ = ownCameraEnd_ = false;
     junction_ = PathEdge();
     value_ = Spectrum(0.0);
+    directEmitter_ = directSensor_ = -1;
 }
 
-const PathVertex &JoinedPath::vertex(int i) const {
-    const int n = length();
-    if (i < 0) return PathVertex::emitterSupernode();
-    if (i >= n) return PathVertex::sensorSupernode();
-    if (i < a_) return i == a_ - 1 && ownLightEnd_ ? lightEnd_ : light_->vertex(i);
-    const int j = n - 1 - i;
-    return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
-}
-
-const PathEdge &JoinedPath::edge(int i) const {
-    if (i < a_ - 1) return light_->edge(i);
-    if (i == a_ - 1) return junction_;
-    return camera_->edge(length() - 2 - i);
+void JoinedPath::setEnd(bool lightSide, const PathVertex &v, bool copy) {
+    bool &own = lightSide ? ownLightEnd_ : ownCameraEnd_;
+    own = copy || v.delta;
+    if (!own) return;
+    PathVertex &end = lightSide ? lightEnd_ : cameraEnd_;
+    end = v;
+    end.delta = false;
 }
 
 bool JoinedPath::connect(const Scene &scene, const Path &light, int s, const Path &camera, int t) {
     reset(&light, s, &camera, t, s);
-    lightEnd_ = light.vertex(s - 1);
-    cameraEnd_ = camera.vertex(t - 1);
-    ownLightEnd_ = ownCameraEnd_ = true;
-    return smoothAt(lightEnd_, TransportMode::Importance) && smoothAt(cameraEnd_, TransportMode::Radiance) &&
-           finishConnection(scene);
+    const PathVertex &l = light.vertex(s - 1), &c = camera.vertex(t - 1);
+    if (!smoothAt(l, TransportMode::Importance) || !smoothAt(c, TransportMode::Radiance)) return false;
+    setEnd(true, l, false);
+    setEnd(false, c, t == 1);  // light tracing sets the sensor node's raster position
+    return finishConnection(scene);
 }
 
 bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const Path &camera, int t) {
     reset(nullptr, 1, &camera, t, 1);
-    cameraEnd_ = camera.vertex(t - 1);
-    ownCameraEnd_ = true;
-    if (!smoothAt(cameraEnd_, TransportMode::Radiance)) return false;
-    DirectSample ds(cameraEnd_.position(), cameraEnd_.type == VertexType::Surface ? cameraEnd_.its.n : Vec3());
+    const PathVertex &c = camera.vertex(t - 1);
+    if (!smoothAt(c, TransportMode::Radiance)) return false;
+    setEnd(false, c, false);
+    DirectSample ds(c.position(), c.type == VertexType::Surface ? c.its.n : Vec3());
     scene.sampleEmitterDirect(ds, u);
     if (!(ds.pdf > 0) || !ds.object) return false;
     const auto *emitter = static_cast<const Emitter *>(ds.object);
@@ -161,19 +167,20 @@ bool JoinedPath::connectDirectEmitter(const Scene &scene, const Vec2 &u, const P
     const PathVertex &supernode = PathVertex::emitterSupernode();
     lightEnd_.pdf[modeIndex(TransportMode::Importance)] =
         supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
-    const double density = directDensity(scene, lightEnd_, cameraEnd_);
+    const double density = directDensity(scene, lightEnd_, c);
     if (!(density > 0)) return false;
     lightEnd_.throughput = supernode.eval(scene, nullptr, lightEnd_, TransportMode::Importance) / density;
+    directEmitter_ = density;
     return finishConnection(scene);
 }
 
 bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Path &light, int s) {
     reset(&light, s, nullptr, 1, s);
-    lightEnd_ = light.vertex(s - 1);
-    ownLightEnd_ = true;
-    if (!smoothAt(lightEnd_, TransportMode::Importance)) return false;
+    const PathVertex &l = light.vertex(s - 1);
+    if (!smoothAt(l, TransportMode::Importance)) return false;
+    setEnd(true, l, false);
     const Sensor &sensor = scene.sensor();
-    DirectSample ds(lightEnd_.position(), lightEnd_.type == VertexType::Surface ? lightEnd_.its.n : Vec3());
+    DirectSample ds(l.position(), l.type == VertexType::Surface ? l.its.n : Vec3());
     sensor.sampleDirect(ds, u);
     if (!(ds.pdf > 0)) return false;
     PositionSample ps;
@@ -186,24 +193,44 @@ bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Pa
     const PathVertex &supernode = PathVertex::sensorSupernode();
     cameraEnd_.pdf[modeIndex(TransportMode::Radiance)] =
         supernode.evalPdf(scene, nullptr, cameraEnd_, kStatelessEdge, TransportMode::Radiance);
-    const double density = directDensity(scene, cameraEnd_, lightEnd_);
+    const double density = directDensity(scene, cameraEnd_, l);
     if (!(density > 0)) return false;
     cameraEnd_.throughput = supernode.eval(scene, nullptr, cameraEnd_, TransportMode::Radiance) / density;
+    directSensor_ = density;
     return finishConnection(scene);
 }
 
 bool JoinedPath::finishConnection(const Scene &scene) {
-    lightEnd_.delta = cameraEnd_.delta = false;
-    const Vec3 toLight = normalize(lightEnd_.position() - cameraEnd_.position());
-    // Light tracing lands wherever the connection enters the sensor.
-    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd_.position(), toLight, cameraEnd_.ps.uv)) return false;
-    const Spectrum fLight = lightEnd_.eval(scene, &vertex(a_ - 2), cameraEnd_, TransportMode::Importance);
-    if (fLight.isBlack()) return false;
-    const Spectrum fCamera = cameraEnd_.eval(scene, &vertex(a_ + 1), lightEnd_, TransportMode::Radiance);
-    if (fCamera.isBlack() || !pf::connect(scene, lightEnd_, cameraEnd_, junction_)) return false;
-    value_ =
-        lightEnd_.throughput * fLight * edgeTerm(lightEnd_, cameraEnd_, junction_) * fCamera * cameraEnd_.throughput;
+    const PathVertex &lightEnd = vertex(a_ - 1), &cameraEnd = vertex(a_);
+    const Vec3 toLight = normalize(lightEnd.position() - cameraEnd.position());
+    // Light tracing lands wherever the connection enters the sensor (b = 1: the sensor node is a copy).
+    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd.position(), toLight, cameraEnd_.ps.uv)) return false;
+    const PathVertex &lightPred = vertex(a_ - 2), &cameraPred = vertex(a_ + 1);
+    const PathVertex::ConnectionTerms light =
+        lightEnd.evalConnection(scene, &lightPred, cameraEnd, TransportMode::Importance);
+    if (light.f.isBlack()) return false;
+    const PathVertex::ConnectionTerms camera =
+        cameraEnd.evalConnection(scene, &cameraPred, lightEnd, TransportMode::Radiance);
+    if (camera.f.isBlack() || !pf::connect(scene, lightEnd, cameraEnd, junction_)) return false;
+    value_ = lightEnd.throughput * light.f * edgeTerm(lightEnd, cameraEnd, junction_) * camera.f * cameraEnd.throughput;
+    pRevJunction_[0] = cameraEnd.areaDensity(camera.toSucc, lightEnd, junction_, TransportMode::Radiance);
+    pFwdJunction_[0] = lightEnd.areaDensity(light.toSucc, cameraEnd, junction_, TransportMode::Importance);
+    if (a_ >= 2)
+        pRevJunction_[1] = lightEnd.areaDensity(light.toPred, lightPred, edge(a_ - 2), TransportMode::Radiance);
+    if (b_ >= 2)
+        pFwdJunction_[1] = cameraEnd.areaDensity(camera.toPred, cameraPred, edge(a_), TransportMode::Importance);
     return !value_.isBlack();
+}
+
+void JoinedPath::evalJunctionDensities(const Scene &scene) {
+    const int a = a_;
+    pRevJunction_[0] = vertex(a).evalPdf(scene, &vertex(a + 1), vertex(a - 1), edge(a - 1), TransportMode::Radiance);
+    pFwdJunction_[0] = vertex(a - 1).evalPdf(scene, &vertex(a - 2), vertex(a), edge(a - 1), TransportMode::Importance);
+    if (a >= 2)
+        pRevJunction_[1] =
+            vertex(a - 1).evalPdf(scene, &vertex(a), vertex(a - 2), edge(a - 2), TransportMode::Radiance);
+    if (b_ >= 2)
+        pFwdJunction_[1] = vertex(a).evalPdf(scene, &vertex(a - 1), vertex(a + 1), edge(a), TransportMode::Importance);
 }
 
 bool JoinedPath::hitEmitter(const Scene &scene, const Path &camera, int t) {
@@ -217,7 +244,9 @@ bool JoinedPath::hitEmitter(const Scene &scene, const Path &camera, int t) {
         supernode.evalPdf(scene, nullptr, lightEnd_, kStatelessEdge, TransportMode::Importance);
     value_ = lightEnd_.throughput * lightEnd_.eval(scene, &vertex(1), supernode, TransportMode::Radiance) *
              supernode.eval(scene, &lightEnd_, supernode, TransportMode::Radiance);
-    return !value_.isBlack();
+    if (value_.isBlack()) return false;
+    evalJunctionDensities(scene);
+    return true;
 }
 
 bool JoinedPath::hitLens(const Scene &scene, const Path &light, const LensHit &hit) {
@@ -229,27 +258,41 @@ bool JoinedPath::hitLens(const Scene &scene, const Path &light, const LensHit &h
     value_ = cameraEnd_.throughput *
              cameraEnd_.eval(scene, &light.vertex(hit.from), supernode, TransportMode::Importance) *
              supernode.eval(scene, &cameraEnd_, supernode, TransportMode::Importance);
-    return !value_.isBlack();
+    if (value_.isBlack()) return false;
+    evalJunctionDensities(scene);
+    return true;
 }
 
-void JoinedPath::densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const {
-    const int n = length(), imp = modeIndex(TransportMode::Importance), rad = modeIndex(TransportMode::Radiance);
-    pFwd.resize(static_cast<size_t>(n));
-    pRev.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
-        pFwd[static_cast<size_t>(i)] = vertex(i).pdf[imp];
-        pRev[static_cast<size_t>(i)] = vertex(i).pdf[rad];
-    }
-    // The junction between x_{a-1} and x_a gives both ends new neighbours: p<- of the last two emitter-side
-    // vertices and p-> of the first two sensor-side ones change.
-    const int a = a_;
-    const auto at = [](int i) { return static_cast<size_t>(i); };
-    pRev[at(a - 1)] = vertex(a).evalPdf(scene, &vertex(a + 1), vertex(a - 1), edge(a - 1), TransportMode::Radiance);
-    if (a >= 2)
-        pRev[at(a - 2)] = vertex(a - 1).evalPdf(scene, &vertex(a), vertex(a - 2), edge(a - 2), TransportMode::Radiance);
-    pFwd[at(a)] = vertex(a - 1).evalPdf(scene, &vertex(a - 2), vertex(a), edge(a - 1), TransportMode::Importance);
-    if (a + 1 < n)
-        pFwd[at(a + 1)] = vertex(a).evalPdf(scene, &vertex(a - 1), vertex(a + 1), edge(a), TransportMode::Importance);
+void JoinedPath::densities(const Scene &scene, bool sampleDirect, PathDensities &d) const {
+    const int n = length(), a = a_, b = b_;
+    const size_t size = static_cast<size_t>(n);
+    d.pFwd.resize(size);
+    d.pRev.resize(size);
+    d.connectable.resize(size);
+    const int imp = modeIndex(TransportMode::Importance), rad = modeIndex(TransportMode::Radiance);
+    const auto put = [&](int i, const PathVertex &v) {
+        const size_t k = static_cast<size_t>(i);
+        d.pFwd[k] = v.pdf[imp];
+        d.pRev[k] = v.pdf[rad];
+        d.connectable[k] = v.isConnectable();
+    };
+    // The walks' vertices straight from the subpaths (x_i = light vertex i, x_{n-1-j} = sensor vertex j).
+    for (int i = 0; i + 1 < a; ++i) put(i, light_->vertex(i));
+    put(a - 1, ownLightEnd_ ? lightEnd_ : light_->vertex(a - 1));
+    put(a, ownCameraEnd_ ? cameraEnd_ : camera_->vertex(b - 1));
+    for (int j = b - 2; j >= 0; --j) put(n - 1 - j, camera_->vertex(j));
+    d.pRev[static_cast<size_t>(a - 1)] = pRevJunction_[0];
+    d.pFwd[static_cast<size_t>(a)] = pFwdJunction_[0];
+    if (a >= 2) d.pRev[static_cast<size_t>(a - 2)] = pRevJunction_[1];
+    if (b >= 2) d.pFwd[static_cast<size_t>(a + 1)] = pFwdJunction_[1];
+    d.directEmitter = d.directSensor = 0;
+    if (!sampleDirect || n < 3) return;
+    d.directEmitter = directEmitter_ >= 0 ? directEmitter_
+                      : a >= 2            ? light_->endpointDirectDensity(scene)
+                                          : directDensity(scene, vertex(0), vertex(1));
+    d.directSensor = directSensor_ >= 0 ? directSensor_
+                     : b >= 2           ? camera_->endpointDirectDensity(scene)
+                                        : directDensity(scene, vertex(n - 1), vertex(n - 2));
 }
 
 Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode) {

@@ -8,7 +8,7 @@
 //
 // Random numbers: a walk draws from its sampler in vertex order (vertex.h lists the count per vertex),
 // so a subpath is a pure function of the sampler's stream and its first k vertices do not depend on
-// how long the walk runs. Russian roulette draws one more number per vertex from rrDepth edges on.
+// how long the walk runs. Russian roulette draws one more number before each edge from edge rrDepth on.
 //
 // Depth, as Mitsuba 0.6 counts it for maxDepth and rrDepth: the edges of a path plus the index-matched
 // surfaces they cross (edge.h), since Mitsuba's walks make a vertex of every such crossing
@@ -34,7 +34,7 @@ class Path {
 public:
     // Samples a walk of `mode` (Importance: from the emitters; Radiance: from the sensor, through raster
     // position `raster`) with at most maxVertices vertices (-1: unbounded) besides the supernode, and
-    // Russian roulette once the walk has rrDepth edges, both counted with the crossings of index-matched
+    // Russian roulette from its edge rrDepth on (as Mitsuba's bdpt), both counted with the crossings of index-matched
     // surfaces (a walk's depth + 1 vertices at most). The emitter walk records where it crosses a finite
     // lens. Along the way each vertex gets its reverse density (p of the other walk) as soon as its two
     // successors are known (ALGORITHMS.md §1.4).
@@ -48,6 +48,10 @@ public:
     // The edge between vertex(i) and vertex(i + 1), i >= 0.
     const PathEdge &edge(int i) const { return edges_[static_cast<size_t>(i)]; }
     const std::vector<LensHit> &lensHits() const { return lensHits_; }
+    // directDensity of the endpoint node (vertex 0) from vertex 1 (size() >= 2): how the other walk's
+    // direct sampling (BDPT's s = 1 or t = 1) would produce it. Every strategy that keeps both vertices
+    // has it in its MIS weight, so it is computed once per walk, when first asked.
+    double endpointDirectDensity(const Scene &scene) const;
 
 private:
     void recordLensHit(const Scene &scene, int from, const PathEdge &edge, double survival);
@@ -56,6 +60,16 @@ private:
     std::vector<PathVertex> vertices_;
     std::vector<PathEdge> edges_;
     std::vector<LensHit> lensHits_;
+    mutable double endpointDirect_ = -1;  // endpointDirectDensity once known
+};
+
+// What the MIS weights of a complete path's strategies depend on (mis.h): p->(x_i) and p<-(x_i), whether a
+// connection can end at x_i, and the endpoint densities of direct sampling, directDensity of x_0 from x_1
+// and of x_{n-1} from x_{n-2} (zero where they take no part: without sampleDirect, or for n < 3).
+struct PathDensities {
+    std::vector<double> pFwd, pRev;
+    std::vector<char> connectable;
+    double directEmitter = 0, directSensor = 0;
 };
 
 // A complete path x_0 .. x_{n-1} in light order; vertex(-1) and vertex(n) are the supernodes.
@@ -98,8 +112,20 @@ public:
     bool hitLens(const Scene &scene, const Path &light, const LensHit &hit);
 
     int length() const override { return a_ + b_; }
-    const PathVertex &vertex(int i) const override;
-    const PathEdge &edge(int i) const override;
+    // Inline: the connection and the MIS weights read the path's vertices many times per strategy.
+    const PathVertex &vertex(int i) const override {
+        const int n = length();
+        if (i < 0) return PathVertex::emitterSupernode();
+        if (i >= n) return PathVertex::sensorSupernode();
+        if (i < a_) return i == a_ - 1 && ownLightEnd_ ? lightEnd_ : light_->vertex(i);
+        const int j = n - 1 - i;
+        return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
+    }
+    const PathEdge &edge(int i) const override {
+        if (i < a_ - 1) return light_->edge(i);
+        if (i == a_ - 1) return junction_;
+        return camera_->edge(length() - 2 - i);
+    }
     // s and t of the strategy that built the path.
     int lightVertices() const { return s_; }
     int sensorVertices() const { return length() - s_; }
@@ -107,14 +133,23 @@ public:
     const Spectrum &contribution() const { return value_; }
     // Where the path meets the film.
     const Vec2 &raster() const { return vertex(length() - 1).ps.uv; }
-    // The densities of every vertex as BDPT keeps them: those stored by the walks, and the four that the
-    // junction changes recomputed with EVALPDF (ALGORITHMS.md §1.4).
-    void densities(const Scene &scene, std::vector<double> &pFwd, std::vector<double> &pRev) const;
+    // The densities of every vertex as BDPT keeps them (ALGORITHMS.md §1.4): those stored by the walks,
+    // and the four that the junction changes, evaluated when the path was built. The direct densities
+    // are those of the builder's own direct sample, or of the walks (Path::endpointDirectDensity).
+    void densities(const Scene &scene, bool sampleDirect, PathDensities &d) const;
 
 private:
     void reset(const Path *light, int a, const Path *camera, int b, int s);
-    // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, and f / p.
+    // Makes walk vertex v the junction's light (or sensor) end. The junction's ends are smooth vertices of
+    // the joined path: one that left its walk through a Dirac lobe is copied with that flag cleared, as is
+    // one the connection changes (`copy`); the others are used in place, since copying every end showed
+    // in profiles (issue 17).
+    void setEnd(bool lightSide, const PathVertex &v, bool copy);
+    // Completes a connection between lightEnd_ and cameraEnd_: visibility, the pixel for t = 1, f / p,
+    // and the junction's densities.
     bool finishConnection(const Scene &scene);
+    // The junction's densities with EVALPDF, for the paths that end at an emitter or the lens.
+    void evalJunctionDensities(const Scene &scene);
 
     const Path *light_ = nullptr, *camera_ = nullptr;
     int a_ = 0, b_ = 0, s_ = 0;        // vertices taken from each side (including the ends below); strategy s
@@ -122,6 +157,10 @@ private:
     bool ownLightEnd_ = false, ownCameraEnd_ = false;
     PathEdge junction_;  // between vertex(a - 1) and vertex(a)
     Spectrum value_;
+    // What the junction changes: p<- of x_{a-1} and x_{a-2}, p-> of x_a and x_{a+1} (where they exist).
+    double pRevJunction_[2] = {0, 0}, pFwdJunction_[2] = {0, 0};
+    // directDensity of x_0 from x_1 and of x_{n-1} from x_{n-2} where a builder computed it; -1 otherwise.
+    double directEmitter_ = -1, directSensor_ = -1;
 };
 
 // Mitsuba's depth of a complete path: its edges plus the index-matched surfaces they cross. maxDepth

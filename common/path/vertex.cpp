@@ -95,7 +95,7 @@ Ray PathVertex::spawnRay(const Scene &scene, const Vec3 &d) const {
     return Ray(its.p, d);
 }
 
-void PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi,
+bool PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi,
                                  Vec3 &wo) const {
     if (delta) {
         // Rebuilt from positions, a direction is tilted by the offset of the ray origin (Scene::spawnRay)
@@ -104,10 +104,13 @@ void PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ,
         const bool forward = mode == walkMode;
         wi = forward ? its.wi : woLocal;
         wo = forward ? woLocal : its.wi;
-        return;
+        return sidesAgree(its, wi, wo);
     }
-    wi = its.toLocal(normalize(pred.position() - position()));
-    wo = its.toLocal(normalize(succ.position() - position()));
+    // The side test on the world directions themselves (sameSide without the round trip to the local frame).
+    const Vec3 toPred = normalize(pred.position() - position()), toSucc = normalize(succ.position() - position());
+    wi = its.toLocal(toPred);
+    wo = its.toLocal(toSucc);
+    return dot(toPred, its.n) * wi.z > 0 && dot(toSucc, its.n) * wo.z > 0;
 }
 
 Spectrum PathVertex::endpointProfile(const Scene &scene, const Vec3 &target) const {
@@ -246,8 +249,7 @@ Spectrum PathVertex::eval(const Scene &scene, const PathVertex *pred, const Path
         }
         case VertexType::Surface: {
             Vec3 wi, wo;
-            localDirections(*pred, succ, mode, wi, wo);
-            if (!sidesAgree(its, wi, wo)) return Spectrum(0.0);
+            if (!localDirections(*pred, succ, mode, wi, wo)) return Spectrum(0.0);
             Spectrum f =
                 its.bsdf()->eval(BSDFContext(mode), its, wi, wo, delta ? Measure::Discrete : Measure::SolidAngle);
             if (mode == TransportMode::Importance) f *= shadingNormalCorrection(its, its.toWorld(wo), its.toWorld(wi));
@@ -268,38 +270,65 @@ double PathVertex::evalPdf(const Scene &scene, const PathVertex *pred, const Pat
     if (type == VertexType::SensorSupernode) return scene.sensor().pdfPosition(succ.ps);
     // No walk reaches a point (point light, pinhole) or enters a parallel beam.
     if (succ.hasDeltaPosition() || succ.hasDeltaDirection()) return 0.0;
-    const Vec3 toSucc = succ.position() - position();
-    const double dist2 = toSucc.lengthSquared();
-    const Vec3 d = toSucc / std::sqrt(dist2);
-    double pdfDir = 0;
+    return areaDensity(directionPdf(scene, pred, succ, mode), succ, edge, mode);
+}
+
+double PathVertex::directionPdf(const Scene &scene, const PathVertex *pred, const PathVertex &succ,
+                                TransportMode mode) const {
     switch (type) {
         case VertexType::EmitterNode:
         case VertexType::SensorNode: {
             DirectionSample ds;
-            ds.d = d;
+            const Vec3 toSucc = succ.position() - position();
+            ds.d = toSucc / std::sqrt(toSucc.lengthSquared());
             ds.measure = hasDeltaDirection() ? Measure::Discrete : Measure::SolidAngle;
-            if (type == VertexType::EmitterNode)
-                pdfDir = emitter->pdfDirection(ds, ps);
-            else if (beyondNearClip(scene.sensor(), succ.position()))
-                pdfDir = scene.sensor().pdfDirection(ds, ps);
-            break;
+            if (type == VertexType::EmitterNode) return emitter->pdfDirection(ds, ps);
+            return beyondNearClip(scene.sensor(), succ.position()) ? scene.sensor().pdfDirection(ds, ps) : 0.0;
         }
         case VertexType::Surface: {
             Vec3 wi, wo;
-            localDirections(*pred, succ, mode, wi, wo);
-            if (!sidesAgree(its, wi, wo)) return 0.0;
-            pdfDir = its.bsdf()->pdf(BSDFContext(mode), its, wi, wo, delta ? Measure::Discrete : Measure::SolidAngle);
-            break;
+            if (!localDirections(*pred, succ, mode, wi, wo)) return 0.0;
+            return its.bsdf()->pdf(BSDFContext(mode), its, wi, wo, delta ? Measure::Discrete : Measure::SolidAngle);
         }
         case VertexType::Medium:
-            pdfDir = medium->phase().pdf(normalize(pred->position() - position()), d);
-            break;
+            return medium->phase().pdf(normalize(pred->position() - position()),
+                                       normalize(succ.position() - position()));
         default:
-            break;
+            return 0.0;
     }
+}
+
+double PathVertex::areaDensity(double pdfDir, const PathVertex &succ, const PathEdge &edge, TransportMode mode) const {
+    if (succ.hasDeltaPosition() || succ.hasDeltaDirection()) return 0.0;
+    const Vec3 toSucc = succ.position() - position();
+    const double dist2 = toSucc.lengthSquared();
+    const Vec3 d = toSucc / std::sqrt(dist2);
     // Solid angle to succ's measure: D at succ over d^2, except from a parallel beam, which does not spread.
     const double spread = hasDeltaDirection() ? 1.0 : 1.0 / dist2;
     return pdfDir * succ.cosine(d) * spread * edge.pdf[modeIndex(mode)];
+}
+
+PathVertex::ConnectionTerms PathVertex::evalConnection(const Scene &scene, const PathVertex *pred,
+                                                       const PathVertex &succ, TransportMode mode) const {
+    ConnectionTerms c;
+    if (type != VertexType::Surface) {
+        c.f = eval(scene, pred, succ, mode);
+        if (c.f.isBlack()) return c;
+        c.toSucc = directionPdf(scene, pred, succ, mode);
+        if (!pred->isSupernode()) c.toPred = directionPdf(scene, &succ, *pred, otherMode(mode));
+        return c;
+    }
+    // As eval and directionPdf compute them, with the local directions and the side test shared: the
+    // reverse density swaps wi and wo (a connection's end is never delta, so both come from positions).
+    Vec3 wi, wo;
+    if (!localDirections(*pred, succ, mode, wi, wo)) return c;
+    const BSDF *bsdf = its.bsdf();
+    c.f = bsdf->eval(BSDFContext(mode), its, wi, wo, Measure::SolidAngle);
+    if (c.f.isBlack()) return c;
+    if (mode == TransportMode::Importance) c.f *= shadingNormalCorrection(its, its.toWorld(wo), its.toWorld(wi));
+    c.toSucc = bsdf->pdf(BSDFContext(mode), its, wi, wo, Measure::SolidAngle);
+    c.toPred = bsdf->pdf(BSDFContext(otherMode(mode)), its, wo, wi, Measure::SolidAngle);
+    return c;
 }
 
 bool PathVertex::cast(const Scene &scene, VertexType to) {

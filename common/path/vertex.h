@@ -102,17 +102,39 @@ struct PathVertex {
     // produces succ across `edge` in the walk of `mode`.
     double evalPdf(const Scene &scene, const PathVertex *pred, const PathVertex &succ, const PathEdge &edge,
                    TransportMode mode) const;
+    // EVAL and both direction densities at the end of a connection (a vertex that is neither a supernode
+    // nor delta), computed together so that a surface finds its local directions and sides once: see
+    // ConnectionTerms. pred is its walk predecessor, succ the vertex across the connection.
+    struct ConnectionTerms;
+    ConnectionTerms evalConnection(const Scene &scene, const PathVertex *pred, const PathVertex &succ,
+                                   TransportMode mode) const;
+    // EVALPDF's last step: a direction density at this vertex (as directionPdf gives it) in succ's measure
+    // across `edge`.
+    double areaDensity(double pdfDir, const PathVertex &succ, const PathEdge &edge, TransportMode mode) const;
     // CAST ([TH A4]): reinterprets the vertex as `type`. A surface on an area emitter becomes an emitter
     // node (the end of a sensor walk that found an emitter), and such a node becomes the surface again.
     // Returns false (leaving the vertex unchanged) when the reinterpretation is impossible.
     bool cast(const Scene &scene, VertexType type);
 
 private:
+    // EVALPDF's density per solid angle (or discrete) of leaving towards succ, for an interior or endpoint
+    // vertex.
+    double directionPdf(const Scene &scene, const PathVertex *pred, const PathVertex &succ, TransportMode mode) const;
     // Local (shading-frame) directions towards pred and succ; Dirac vertices keep the directions they
-    // were sampled with (see vertex.cpp).
-    void localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi, Vec3 &wo) const;
+    // were sampled with (see vertex.cpp). Returns whether both lie on the side where the geometric and the
+    // shading normal agree (f is zero otherwise, see above).
+    bool localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi, Vec3 &wo) const;
     Spectrum endpointProfile(const Scene &scene, const Vec3 &d) const;
     Ray spawnRay(const Scene &scene, const Vec3 &d) const;
+};
+
+// What a connection needs at one of its ends: f = EVAL(pred, v, succ) in the walk's mode, and the
+// direction densities of sampling succ from pred in that mode (toSucc) and pred from succ in the other
+// (toPred; zero when pred is a supernode), which areaDensity turns into the p-> and p<- that the junction
+// changes (ALGORITHMS.md §1.4).
+struct PathVertex::ConnectionTerms {
+    Spectrum f{0.0};
+    double toSucc = 0, toPred = 0;
 };
 
 // CONNECT's visibility ([TH A4]): the edge from light-side vertex a to sensor-side vertex b, with
