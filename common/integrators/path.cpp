@@ -28,15 +28,13 @@
 
 #include "bsdf/bsdf.h"
 #include "integrators/visibility.h"
+#include "scene/crossings.h"
 #include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace pf {
 
 namespace {
-
-// Bound on consecutive pass-through crossings between two scattering events (coincident null surfaces).
-constexpr int kMaxCrossings = 256;
 
 // How many index-matched surfaces a shadow ray or emitter search from a vertex at `depth` may cross
 // (Mitsuba's `interactions = maxDepth - depth - 1`): each crossing is one more segment of the path.

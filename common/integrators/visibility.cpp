@@ -3,16 +3,13 @@
 #include <new>
 
 #include "bsdf/bsdf.h"
+#include "scene/crossings.h"
 #include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace pf {
 
 namespace {
-
-// Bound on the surfaces one walk crosses, so that a degenerate configuration (coincident null
-// surfaces) cannot loop forever.
-constexpr int kMaxCrossings = 256;
 
 // Medium segments run between the points where the walk meets surfaces (not the offset origins of the
 // rays spawned there), so that media are not thinned by the ray epsilon at every crossing.

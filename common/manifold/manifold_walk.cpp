@@ -5,6 +5,7 @@
 #include "bsdf/bsdf.h"
 #include "manifold/chain_jacobian.h"
 #include "manifold/specular_constraint.h"
+#include "scene/crossings.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -16,9 +17,6 @@ namespace {
 // does, would move the next vertex by up to 1e-4 and leave the path that far off the manifold), so
 // self-intersection is avoided with tmin = the scene's offset length instead.
 Ray chainRay(const Scene &scene, const Vec3 &origin, const Vec3 &d) { return Ray(origin, d, scene.epsilonAt(origin)); }
-
-// Bound on the index-matched surfaces one chain segment crosses, so that coincident null surfaces cannot loop.
-constexpr int kMaxCrossings = 256;
 
 // Whether a constrained vertex keeps its configuration along a corrector trace: same shape and BSDF, hit from
 // the same side, and an outgoing direction on the side its scattering type requires.

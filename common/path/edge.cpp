@@ -1,15 +1,13 @@
 #include "path/edge.h"
 
 #include "integrators/visibility.h"
+#include "scene/crossings.h"
 #include "scene/medium.h"
 #include "scene/scene.h"
 
 namespace pf {
 
 namespace {
-
-// Bound on the index-matched surfaces one edge crosses, so that coincident null surfaces cannot loop.
-constexpr int kMaxCrossings = 256;
 
 // The medium segments of one edge (between the surfaces it crosses) and what each walk pays for them
 // (ALGORITHMS.md §1.4): a walk crosses every segment on its way and, when the edge ends at a medium
