@@ -112,6 +112,21 @@ TEST(WorkerBatchFlag, OutOfRangeIsRefusedNamingTheFlag) {
     }
 }
 
+// The master's batch governor settings out of range, or not numbers, are refused at start-up with an error naming
+// the flag, before the master opens its data directory or listens.
+TEST(MasterBatchFlags, OutOfRangeIsRefusedNamingTheFlag) {
+    for (const auto &[flag, bad] : std::vector<std::pair<std::string, std::string>>{
+             {"--batch-busy", "-1"}, {"--batch-busy", "x"}, {"--batch-window-ms", "5"}, {"--batch-window-ms", "x"}}) {
+        const ProcessResult r = runCommand("timeout 20 " + std::string(PATHFARM_MASTER_BIN) +
+                                           " --listen 127.0.0.1:0 --data /nonexistent/pathfarm --token-file /dev/null"
+                                           " --worker-token-file /dev/null " +
+                                           flag + " " + bad + " 2>&1");
+        EXPECT_NE(r.exitCode, 0) << flag << " " << bad;
+        EXPECT_NE(r.exitCode, 124) << flag << " " << bad << ": the master started";
+        EXPECT_NE(r.output.find(flag), std::string::npos) << r.output;
+    }
+}
+
 // The governor (master/batch_governor.h) on a clock of its own: the batch doubles after each window in which
 // taking results used more than the busy share of a core, halves after one below a fifth of it, and stays
 // between 1 and its most.
