@@ -154,7 +154,7 @@ TEST_F(StorageFaults, DamagedCheckpointIsRenderedAgain) {
 TEST_F(StorageFaults, DamagedSeedingOfAChainJobIsRenderedAgain) {
     // At 80 x 80: two seeding tasks, four direct-component tasks, then chain tasks (test_farm_chains).
     res = 80;
-    spec = "--integrator pssmlt --spp 8 -P luminanceSamples=20000 -P directSamples=4 --seed 7 -P maxDepth=4";
+    spec = "--integrator pssmlt --spp 64 -P luminanceSamples=20000 -P directSamples=4 --seed 7 -P maxDepth=4";
     const std::vector<std::string> args = {"--lease-ms", "1500", "--heartbeat-ms", "250", "--checkpoint-ms", "200"};
     runUntil(args, [&] { return count("SELECT COUNT(*) FROM merges WHERE job_id = ") >= 3; });
     const std::vector<std::string> seeding = filesIn(jobDir() + "/results", "0-");
