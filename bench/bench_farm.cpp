@@ -88,8 +88,9 @@ std::map<int64_t, std::string> resultsBySampleCount(const std::string &scene, in
     auto loaded = loadScene(scene);
     const auto integrator = makeIntegrator(*loaded, "", {});
     std::map<int64_t, std::string> out;
-    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first)) {
-        const int64_t count = imageTaskSize(spp, first);
+    const int64_t pixels = filmPixels(loaded->sensor().film());
+    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first, pixels)) {
+        const int64_t count = imageTaskSize(spp, first, pixels);
         if (!out.count(count))
             out[count] = farm::encodeBlock(runImageTask(*loaded, dynamic_cast<const SamplingIntegrator &>(*integrator),
                                                         1, ImageTask{0, std::min<int64_t>(count, 16)}, 2)
@@ -209,7 +210,8 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
     test::farm::Farm farm("bench-saturate");
     const std::string copy = resizedCopy(scene, res, farm.dir() + "/scene");
     int64_t spp = 0;
-    for (int64_t n = 0; n < tasks; ++n) spp += imageTaskSize(std::numeric_limits<int64_t>::max(), spp);
+    for (int64_t n = 0; n < tasks; ++n)
+        spp += imageTaskSize(std::numeric_limits<int64_t>::max(), spp, int64_t{res} * res);
     if (results.empty()) results = resultsBySampleCount(copy, spp);
     test::farm::Process &master = farm.startMaster({"--max-spp", std::to_string(spp)});
     std::vector<std::unique_ptr<FakeWorker>> fakes;
@@ -278,7 +280,7 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
     // has only small ones.
     const double pixels = static_cast<double>(res) * res, cpuPerTask = cpu / n;
     const double meanTask = sampleSeconds8 * pixels * static_cast<double>(spp) / n;
-    const double smallest = sampleSeconds8 * pixels * static_cast<double>(imageTaskSize(spp, 0));
+    const double smallest = sampleSeconds8 * pixels * static_cast<double>(imageTaskSize(spp, 0, int64_t{res} * res));
     const double largest = sampleSeconds8 * pixels * static_cast<double>(results.rbegin()->first);
     std::printf(
         "  8-core workers per master:  %7.0f at this job's mean task (%.3f s on 8 cores), %.0f at the\n"
@@ -345,7 +347,7 @@ double realFarm(const std::string &scene, int res, int spp) {
     auto loaded = loadScene(copy);
     const auto integrator = makeIntegrator(*loaded, "", {});
     const ImageTaskResult r = runImageTask(*loaded, dynamic_cast<const SamplingIntegrator &>(*integrator), 1,
-                                           ImageTask{0, imageTaskSize(spp, 0)}, 2);
+                                           ImageTask{0, imageTaskSize(spp, 0, int64_t{res} * res)}, 2);
     const std::string payload = farm::encodeBlock(r.block);
     ImageBlock merged = makeFilmBlock(*loaded), decoded = makeFilmBlock(*loaded);
     constexpr int kRepeats = 10;
@@ -357,10 +359,11 @@ double realFarm(const std::string &scene, int res, int spp) {
     const double mergeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / kRepeats;
     const double cpuPerTask = masterCpu / static_cast<double>(tasks);
     int64_t largest = 0;
-    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first))
-        largest = std::max(largest, imageTaskSize(spp, first));
+    const int64_t pixels = int64_t{res} * res;
+    for (int64_t first = 0; first < spp; first += imageTaskSize(spp, first, pixels))
+        largest = std::max(largest, imageTaskSize(spp, first, pixels));
     std::printf("tasks:                       %8lld of %lld to %lld spp\n", static_cast<long long>(tasks),
-                static_cast<long long>(imageTaskSize(spp, 0)), static_cast<long long>(largest));
+                static_cast<long long>(imageTaskSize(spp, 0, pixels)), static_cast<long long>(largest));
     std::printf("result on the wire:          %8.3f MB per task (%.2f bytes per pixel; raw doubles: 56)\n", bytes / 1e6,
                 bytes / (static_cast<double>(res) * res));
     std::printf("decode + merge:              %8.2f ms per task (in-process)\n", 1e3 * mergeSeconds);

@@ -92,7 +92,7 @@ v1::Job Master::submit(const JobSpec &spec) {
     openFilm(*j, load(spec, j->record));
     // A chain job's total is known once its seeding tells whether the image carries any energy.
     if (j->record.spec().budget().has_spp() && !j->chain)
-        for (int64_t first = 0; first < j->record.spec().budget().spp(); first += taskSize(j->record.spec(), first))
+        for (int64_t first = 0; first < j->record.spec().budget().spp(); first += taskSize(j->record, first))
             ++j->total;
     j->record.mutable_tasks()->set_total(j->total);
     j->record.set_state(v1::JOB_QUEUED);
@@ -225,14 +225,11 @@ void Master::recoverJob(const StoredJob &stored) {
             v1::ImageTask &batch = *last->second.work.mutable_image();
             batch.set_sample_count(batch.sample_count() + work.image().sample_count());
             ++last->second.tasks;
-            ++j.taskCount;
+            j.countTime(work, 1, 0.0);  // the batch's time came with its first task
             continue;
         }
         j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0};
-        if (r.taskIndex >= j.chainFirst) {
-            j.taskSeconds += r.stats.seconds();
-            ++j.taskCount;
-        }
+        if (r.taskIndex >= j.chainFirst) j.countTime(work, 1, r.stats.seconds());
     }
     if (j.chain && j.film.chain->job->seeded()) startChains(j);
     spdlog::info("job={}: resumed: {} tasks issued, {} merged in the checkpoint, {} results waiting, {} leases", id,

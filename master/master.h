@@ -194,8 +194,9 @@ private:
                                                      const std::vector<int64_t> &indices);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
     bool mayIssue(JobRuntime &j);
-    // Whether a batch of batchTasks image tasks of j may take one more (time budgets: if it still ends in time).
-    bool batchMayGrow(const JobRuntime &j, size_t batchTasks) const;
+    // Whether a batch of the batchTasks image tasks of j from firstTask may take one more (time budgets: if it
+    // still ends in time).
+    bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks) const;
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
                  const std::string &error, int64_t attempt);
     void countFailure(JobRuntime &j, const std::string &worker, const std::string &why);

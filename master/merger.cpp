@@ -111,10 +111,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 leases_.erase(attempts[static_cast<size_t>(i)]);
                 j->retry.erase(task + i);
             }
-            if (task >= j->chainFirst) {
-                j->taskSeconds += stats.seconds();
-                j->taskCount += count;
-            }
+            if (task >= j->chainFirst) j->countTime(work, count, stats.seconds());
             if (const auto w = workers_.find(worker); w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
                 for (const int64_t a : attempts) wr.attempts.erase(a);

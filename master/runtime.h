@@ -29,12 +29,12 @@ inline bool isActive(pathfarm::v1::JobState s) {
     return s == pathfarm::v1::JOB_QUEUED || s == pathfarm::v1::JOB_RUNNING;
 }
 
-// Size of every image task in a budget of `spp` samples per pixel; a time budget draws tasks of the
-// largest size (so a timed job that ended after n tasks has exactly the bits of an spp job of the
-// same sample count).
-inline int64_t taskSize(const JobSpec &spec, int64_t firstSample) {
-    return imageTaskSize(spec.budget().has_spp() ? spec.budget().spp() : std::numeric_limits<int64_t>::max(),
-                         firstSample);
+// Size of every image task of a job; a time budget draws tasks as an unbounded spp budget does (so a timed
+// job that ended after n tasks has exactly the bits of an spp job of the same sample count).
+inline int64_t taskSize(const pathfarm::v1::Job &job, int64_t firstSample) {
+    const auto &budget = job.spec().budget();
+    return imageTaskSize(budget.has_spp() ? budget.spp() : std::numeric_limits<int64_t>::max(), firstSample,
+                         int64_t{job.width()} * job.height());
 }
 
 struct Master::Loaded {
@@ -116,8 +116,22 @@ struct Master::JobRuntime {
     bool seeded = false;
     std::map<std::string, int> failuresByWorker;
     std::set<std::string> blocklist;
-    double taskSeconds = 0;  // of accepted results that the time budget issues, for its estimate
+    // Accepted results of the tasks a time budget issues, for its estimate of the next ones: chain tasks
+    // are alike, image tasks grow (render/image_task.h), so theirs is per sample per pixel.
+    double taskSeconds = 0;
     int64_t taskCount = 0;
+    int64_t taskSpp = 0;  // image jobs
+    void countTime(const pathfarm::v1::TaskSpec &work, int64_t tasks, double seconds) {
+        taskSeconds += seconds;
+        taskCount += tasks;
+        if (work.has_image()) taskSpp += work.image().sample_count();
+    }
+    // The time one worker is expected to take for image tasks of `spp` samples per pixel in all, or for one
+    // chain task; 0 before a result is in.
+    double expectedSeconds(int64_t spp) const {
+        if (chain) return taskCount > 0 ? taskSeconds / static_cast<double>(taskCount) : 0.0;
+        return taskSpp > 0 ? taskSeconds * static_cast<double>(spp) / static_cast<double>(taskSpp) : 0.0;
+    }
     int64_t passStartMs = 0;  // when the last pass's first task was issued (0: not since the start)
     int64_t failedAttempts = 0, expiredAttempts = 0;
     std::map<int64_t, int64_t> attemptTask;  // every attempt of this job -> its task

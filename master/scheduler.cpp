@@ -85,7 +85,9 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
                 maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : std::clamp(maxTasks, 1, kMaxBatchTasks));
             std::vector<int64_t> following;
             for (int64_t want = tasks.front().task_index() + 1;
-                 !j.chain && 1 + following.size() < most && batchMayGrow(j, 1 + following.size()); ++want) {
+                 !j.chain && 1 + following.size() < most &&
+                 batchMayGrow(j, tasks.front().task_index(), 1 + following.size());
+                 ++want) {
                 const std::optional<int64_t> next = nextTaskFor(j, w);
                 if (!next) break;
                 if (*next != want) {
@@ -190,7 +192,7 @@ std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w
         if (startsPass(j, index)) j.passStartMs = unixMs();
     } else {
         t.work.mutable_image()->set_first_sample(j.nextFirstSample);
-        t.work.mutable_image()->set_sample_count(taskSize(j.record.spec(), j.nextFirstSample));
+        t.work.mutable_image()->set_sample_count(taskSize(j.record, j.nextFirstSample));
         j.nextFirstSample += t.work.image().sample_count();
     }
     t.work.set_task_index(index);
@@ -198,15 +200,17 @@ std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w
     return index;
 }
 
-bool Master::batchMayGrow(const JobRuntime &j, size_t batchTasks) const {
+bool Master::batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks) const {
     if (j.total > 0) return true;  // a budget in samples: every task is issued anyway
-    // Under a time budget the worker renders a batch's tasks one after another, so the next one ends
-    // batchTasks + 1 task-times from now; with no task time measured yet the batch holds one task (a batch
-    // of 8 whole-image tasks issued blind ran a 20 s job for 95 s).
+    // Under a time budget the worker renders a batch's tasks one after another, so the next one ends when
+    // the batch's samples and its own are rendered; with no task time measured yet the batch holds one task
+    // (a batch of 8 whole-image tasks issued blind ran a 20 s job for 95 s).
     if (j.taskCount == 0) return false;
-    const double estimate = j.taskSeconds / static_cast<double>(j.taskCount);
+    int64_t spp = taskSize(j.record, j.nextFirstSample);
+    for (size_t i = 0; i < batchTasks; ++i)
+        spp += j.tasks[static_cast<size_t>(firstTask) + i].work.image().sample_count();
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
-    return elapsed + static_cast<double>(batchTasks + 1) * estimate <= j.record.spec().budget().time_seconds();
+    return elapsed + j.expectedSeconds(spp) <= j.record.spec().budget().time_seconds();
 }
 
 bool Master::mayIssue(JobRuntime &j) {
@@ -220,8 +224,12 @@ bool Master::mayIssue(JobRuntime &j) {
     // (render/burst.h): a pass once started is issued whole, and the next starts if the last one's time
     // since its first task was issued (at least a task's time) still fits.
     if (j.chain && !startsPass(j, issued)) return true;
+    const int64_t nextSpp = j.chain ? 0 : taskSize(j.record, j.nextFirstSample);
+    // Before any result tells the job's pace, image tasks go out blind only at the smallest size: to many
+    // workers at once, the sequence would otherwise hand out tasks far too long for the budget.
+    if (j.taskCount == 0 && !j.chain && nextSpp > taskSize(j.record, 0)) return false;
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
-    double estimate = j.taskCount > 0 ? j.taskSeconds / static_cast<double>(j.taskCount) : 0.0;
+    double estimate = j.expectedSeconds(nextSpp);
     if (j.chain && j.film.chain->job->tasksPerPass() > 1 && j.passStartMs > 0)
         estimate = std::max(estimate, (unixMs() - j.passStartMs) / 1000.0);
     if (elapsed + estimate <= j.record.spec().budget().time_seconds()) return true;

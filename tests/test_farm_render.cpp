@@ -129,6 +129,38 @@ TEST_F(FarmRender, TimeBudgetIssuesWholeTasksAndRecordsTheTrueTime) {
     EXPECT_TRUE(sameBits(reference(scene, "--spp " + std::to_string(spp) + " --seed 5"), out));
 }
 
+// A large film under a time budget: before any result tells the job's pace, the workers get only the
+// sequence's smallest tasks (1 spp at 1024²), however many of them ask; afterwards a task is issued only if
+// it is expected to end within the budget. (A 1024² BDPT job under --time 20 ran 52 s when its first task
+// was 8 spp and the estimate counted tasks rather than samples.)
+TEST_F(FarmRender, TimeBudgetOnALargeFilmStartsWithItsSmallestTasks) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 1024, 8);
+    farm->startMaster();
+    for (int i = 0; i < 3; ++i) farm->startWorker(1);
+    const std::string out = farm->dir() + "/timed.exr";
+    const double budget = 4;
+    const auto [code, output] = farm->cli("submit " + scene + " --time 4 --seed 3 -P maxDepth=2 --wait -o " + out);
+    ASSERT_EQ(code, 0) << output << farm->master().log();
+    const std::string log = farm->master().log();
+    const size_t firstResult = log.find("accepted,");
+    ASSERT_NE(firstResult, std::string::npos) << log;
+    int blind = 0;
+    for (size_t at = log.find("leased, samples ["); at < firstResult; at = log.find("leased, samples [", at + 1)) {
+        long long from = 0, to = 0;
+        ASSERT_EQ(std::sscanf(log.c_str() + at, "leased, samples [%lld, %lld)", &from, &to), 2);
+        EXPECT_EQ(to - from, 1) << "a task issued before any result: " << log.substr(at, 40);
+        ++blind;
+    }
+    EXPECT_GE(blind, 1) << log;
+    const Bitmap img = readEXR(out);
+    const int spp = std::stoi(img.metadata.at("pathfarm.spp"));
+    EXPECT_GE(spp, 1);
+    // Whole tasks that each fit the budget when issued: the job ends within a task's time of the budget.
+    const double seconds = std::stod(img.metadata.at("pathfarm.renderSeconds"));
+    EXPECT_LT(seconds, 3 * budget) << log;
+    EXPECT_TRUE(sameBits(reference(scene, "--spp " + std::to_string(spp) + " --seed 3 -P maxDepth=2"), out));
+}
+
 TEST_F(FarmRender, CancelStopsAJobAndKeepsItsImage) {
     const std::string scene = writeTestScene(farm->dir() + "/scene", 64, 8);
     farm->startMaster(kFastLeases);

@@ -37,7 +37,7 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
         const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
         // Under a time budget the clock decides whether another whole task starts, never when one stops.
         if (timed ? (done > 0 && elapsed + lastTaskSeconds > opt.timeLimit) : done >= targetSpp) break;
-        const ImageTask task{done, timed ? 1 : imageTaskSize(targetSpp, done)};
+        const ImageTask task{done, timed ? 1 : imageTaskSize(targetSpp, done, filmPixels(film))};
         const ImageTaskResult r = runImageTask(scene, *this, opt.seed, task, threads);
         image.merge(r.block);
         done += task.sampleCount;

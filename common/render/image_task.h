@@ -30,9 +30,13 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
 // An empty block covering the scene's crop window (what tasks are merged into).
 ImageBlock makeFilmBlock(const Scene &scene);
 
-// Splits a budget of `spp` samples per pixel into the fixed task sizes used by both the embedded
-// renderer and the farm (so that their images agree bitwise): the size of the task that starts at
-// `firstSample` (8 up to sample 128, then growing with the samples before it up to 256).
-int64_t imageTaskSize(int64_t spp, int64_t firstSample);
+// Splits a budget of `spp` samples per pixel of a film (crop window) of `pixels` pixels into the fixed task
+// sizes used by both the embedded renderer and the farm (so that their images agree bitwise): the size of
+// the task that starts at `firstSample`. Up to 256² pixels: 8 up to sample 128, then growing with the
+// samples before it up to 256; larger films scale both bounds down, to 1 and 16 at 1024².
+int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels);
+
+// The film's pixels as imageTaskSize counts them.
+int64_t filmPixels(const Film &film);
 
 }  // namespace pf
