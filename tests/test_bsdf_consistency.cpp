@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "bsdf/fresnel.h"
+#include "core/warp.h"
 #include "test_bsdf_common.h"
 
 namespace pf::test {
@@ -100,6 +101,32 @@ TEST(BSDFConsistency, SampleWeightIsEvalOverPdf) {
             }
         }
     }
+}
+
+// evalPdf (next-event estimation's one call) gives the same bits as eval and pdf, for every model, from
+// both sides and for pairs on either side (a diffuse twosided reaches Diffuse's override from the back).
+TEST(BSDFConsistency, EvalPdfIsEvalAndPdf) {
+    const Intersection its = flatIntersection();
+    PCG32 rng(5, 3);
+    std::vector<Model> models = allModels();
+    models.push_back({"twosided diffuse", makeBSDF("twosided", {}, {nested(makeBSDF("diffuse"))})});
+    for (const Model &model : models)
+        for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+            const BSDFContext ctx(mode);
+            int nonzero = 0;
+            for (int i = 0; i < 200; ++i) {
+                const Vec3 wi = warp::squareToUniformSphere(Vec2(rng.nextDouble(), rng.nextDouble()));
+                const Vec3 wo = warp::squareToUniformSphere(Vec2(rng.nextDouble(), rng.nextDouble()));
+                double pdf = -1;
+                const Spectrum f = model.bsdf->evalPdf(ctx, its, wi, wo, pdf);
+                const Spectrum fExpected = model.bsdf->eval(ctx, its, wi, wo);
+                EXPECT_EQ(pdf, model.bsdf->pdf(ctx, its, wi, wo)) << model.label;
+                for (int c = 0; c < 3; ++c) EXPECT_EQ(f[c], fExpected[c]) << model.label << " channel " << c;
+                nonzero += pdf > 0;
+            }
+            // Smooth models see some pairs they scatter between (delta and null lobes have no density).
+            if (model.bsdf->flags() & BSDFFlags::Smooth) EXPECT_GT(nonzero, 0) << model.label;
+        }
 }
 
 TEST(BSDFConsistency, DeltaLobesOnlyUnderDiscreteMeasure) {

@@ -24,7 +24,7 @@ enum class TransportMode { Radiance, Importance };
 
 namespace BSDFFlags {
 enum : uint32_t {
-    Null = 1u << 0,               // index-matched pass-through (null, mask's transparent part)
+    Null = 1u << 0,  // index-matched pass-through (null, mask's transparent part)
     DiffuseReflection = 1u << 1,
     DiffuseTransmission = 1u << 2,
     GlossyReflection = 1u << 3,
@@ -54,10 +54,10 @@ struct BSDFContext {
 };
 
 struct BSDFSample {
-    Vec3 wo;                  // sampled direction, local shading frame
-    double pdf = 0;           // solid-angle density, or discrete probability for delta lobes
-    double eta = 1;           // relative index of refraction along the sampled direction (1 for reflection)
-    uint32_t sampledType = 0; // the BSDFFlags lobe that was sampled
+    Vec3 wo;                   // sampled direction, local shading frame
+    double pdf = 0;            // solid-angle density, or discrete probability for delta lobes
+    double eta = 1;            // relative index of refraction along the sampled direction (1 for reflection)
+    uint32_t sampledType = 0;  // the BSDFFlags lobe that was sampled
 };
 
 class BSDF : public Object {
@@ -67,10 +67,17 @@ public:
                           Measure measure = Measure::SolidAngle) const = 0;
     virtual double pdf(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, const Vec3 &wo,
                        Measure measure = Measure::SolidAngle) const = 0;
+    // eval and pdf of one direction pair in one call (next-event estimation weighs its sample with both);
+    // models whose two share their tests override it, saving the second dispatch (issue 17).
+    virtual Spectrum evalPdf(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, const Vec3 &wo,
+                             double &pdfOut) const {
+        pdfOut = pdf(ctx, its, wi, wo);
+        return eval(ctx, its, wi, wo);
+    }
     // Samples wo given wi; returns eval/pdf (the sample weight), or zero on failure.
     // u2 drives the direction, u1 the choice between lobes.
-    virtual Spectrum sample(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, BSDFSample &bs,
-                            double u1, const Vec2 &u2) const = 0;
+    virtual Spectrum sample(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, BSDFSample &bs, double u1,
+                            const Vec2 &u2) const = 0;
 
     // Union of BSDFFlags over all lobes (for the whole surface, not a specific point).
     uint32_t flags() const { return flags_; }

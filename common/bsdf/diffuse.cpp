@@ -24,6 +24,16 @@ public:
         return active(ctx, wi, wo, measure) ? warp::squareToCosineHemispherePdf(wo) : 0.0;
     }
 
+    Spectrum evalPdf(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, const Vec3 &wo,
+                     double &pdfOut) const override {
+        if (!active(ctx, wi, wo, Measure::SolidAngle)) {
+            pdfOut = 0;
+            return Spectrum(0.0);
+        }
+        pdfOut = warp::squareToCosineHemispherePdf(wo);
+        return reflectance_->eval(its) * (kInvPi * wo.z);
+    }
+
     Spectrum sample(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, BSDFSample &bs, double,
                     const Vec2 &u2) const override {
         if (!hasLobe(ctx, BSDFFlags::DiffuseReflection) || wi.z <= 0) return Spectrum(0.0);

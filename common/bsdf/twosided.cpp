@@ -31,6 +31,12 @@ public:
         return front_->pdf(ctx, its, wi, wo, measure);
     }
 
+    Spectrum evalPdf(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, const Vec3 &wo,
+                     double &pdfOut) const override {
+        if (wi.z < 0) return back_->evalPdf(ctx, its, flipZ(wi), flipZ(wo), pdfOut);
+        return front_->evalPdf(ctx, its, wi, wo, pdfOut);
+    }
+
     Spectrum sample(const BSDFContext &ctx, const Intersection &its, const Vec3 &wi, BSDFSample &bs, double u1,
                     const Vec2 &u2) const override {
         if (wi.z >= 0) return front_->sample(ctx, its, wi, bs, u1, u2);

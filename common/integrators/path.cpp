@@ -193,10 +193,12 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
                 DirectSample ds(its.p, its.n);
                 const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
                 const Vec3 wo = its.toLocal(ds.d);
-                if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0))
-                    L += throughput * directLight(scene, ds, value, bsdf->eval(ctx, its, its.wi, wo),
-                                                  bsdf->pdf(ctx, its, its.wi, wo), scene.spawnRayTo(its, ds.p),
+                if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0)) {
+                    double bsdfPdf = 0;
+                    const Spectrum f = bsdf->evalPdf(ctx, its, its.wi, wo, bsdfPdf);
+                    L += throughput * directLight(scene, ds, value, f, bsdfPdf, scene.spawnRayTo(its, ds.p),
                                                   media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_, budget);
+                }
             }
 
             BSDFSample bs;
