@@ -54,8 +54,9 @@ Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, cons
     Spectrum L;
     int crossed = 0;  // surfaces passed before the one visited (every visited surface but a blocker is passed)
     const auto visit = [&](const Intersection &its, const Spectrum &T) {
-        const bool left = leaveOut && crossed == 0 && its.isEmitter() && leaveOut->connectsTo(*its.emitter());
-        if (its.isEmitter() && withinBudget(crossed, budget) && !left)
+        const Emitter *emitter = its.emitter();
+        const bool left = leaveOut && crossed == 0 && emitter && leaveOut->connectsTo(*emitter);
+        if (emitter && withinBudget(crossed, budget) && !left)
             L += T * misWeightedEmission(scene, ray, its, ref, dirPdf, delta);
         ++crossed;
     };

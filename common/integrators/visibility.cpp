@@ -11,6 +11,16 @@ namespace pf {
 
 namespace {
 
+// A walk whose first surface blocks whatever it is (no pass-through surfaces, no medium: the loop below would
+// find its null transmittance zero) is one intersection found straight into `its`, without the loop's
+// bookkeeping or a second Intersection to initialize (issue 17: `path`'s emitter search at every vertex).
+Spectrum throughFirstSurface(const Scene &scene, const Ray &ray, const SurfaceVisitor *visit, Intersection &its) {
+    ::new (static_cast<void *>(&its)) Intersection();
+    if (!scene.intersect(ray, its)) return Spectrum(1.0);
+    if (visit) (*visit)(its, Spectrum(1.0));
+    return Spectrum(0.0);
+}
+
 // Medium segments run between the points where the walk meets surfaces (not the offset origins of the
 // rays spawned there), so that media are not thinned by the ray epsilon at every crossing.
 Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit,
@@ -18,18 +28,14 @@ Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium
     // Nothing to pass through and no medium to attenuate: a plain occlusion query answers it.
     const bool firstSurfaceEnds = !scene.hasPassThroughSurfaces() && !(trackMedia && medium);
     if (!visit && !firstHit && firstSurfaceEnds) return scene.occluded(ray) ? Spectrum(0.0) : Spectrum(1.0);
-    Intersection local;
     if (firstSurfaceEnds) {
-        // The first surface blocks whatever it is (the loop below would find its null transmittance zero):
-        // one intersection, without the loop's bookkeeping (issue 17: `path`'s emitter search at every vertex).
-        Intersection &its = firstHit ? *firstHit : local;
-        ::new (static_cast<void *>(&its)) Intersection();
-        if (!scene.intersect(ray, its)) return Spectrum(1.0);
-        if (visit) (*visit)(its, Spectrum(1.0));
-        return Spectrum(0.0);
+        if (firstHit) return throughFirstSurface(scene, ray, visit, *firstHit);
+        Intersection local;
+        return throughFirstSurface(scene, ray, visit, local);
     }
     Spectrum T(1.0);
     Vec3 start = ray.o;
+    Intersection local;
     for (int crossings = 0; crossings < kMaxCrossings; ++crossings) {
         // The first surface is found straight into *firstHit, reset in place: copying an Intersection
         // (some 300 bytes, a `rep movsq`) took half of this walk's time in the path tracer (issue 17's perf).

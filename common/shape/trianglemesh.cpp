@@ -229,7 +229,8 @@ unsigned TriangleMesh::addToEmbree(RTCDevice device, RTCScene scene) const {
     return id;
 }
 
-Vec3 TriangleMesh::surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Vec3 &ng, Vec2 &uv) const {
+// Inline in both callers (every mesh hit and every emitter position sample; issue 17): only this file uses it.
+inline Vec3 TriangleMesh::surfacePoint(uint32_t prim, double b1, double b2, Vec3 &p, Vec3 &ng, Vec2 &uv) const {
     const auto &tri = triangles_[prim];
     const Vec3 &p0 = positions_[tri[0]], &p1 = positions_[tri[1]], &p2 = positions_[tri[2]];
     const double b0 = 1.0 - b1 - b2;
