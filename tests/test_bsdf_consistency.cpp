@@ -125,7 +125,9 @@ TEST(BSDFConsistency, EvalPdfIsEvalAndPdf) {
                 nonzero += pdf > 0;
             }
             // Smooth models see some pairs they scatter between (delta and null lobes have no density).
-            if (model.bsdf->flags() & BSDFFlags::Smooth) EXPECT_GT(nonzero, 0) << model.label;
+            if (model.bsdf->flags() & BSDFFlags::Smooth) {
+                EXPECT_GT(nonzero, 0) << model.label;
+            }
         }
 }
 
