@@ -26,6 +26,8 @@
 //   at, and the emitter hits of the paths it estimates are left out here (caustic_connection.h).
 #include "integrators/path.h"
 
+#include <new>
+
 #include "bsdf/bsdf.h"
 #include "integrators/visibility.h"
 #include "scene/crossings.h"
@@ -52,6 +54,19 @@ Spectrum emissionAlong(const Scene &scene, const Ray &ray, const Vec3 &ref, cons
                        double dirPdf, bool delta, Intersection &next, int budget,
                        const CausticConnection *leaveOut = nullptr) {
     Spectrum L;
+    if (!scene.hasPassThroughSurfaces() && !(trackMedia && medium)) {
+        // The first surface ends the search (nothing to cross, no medium): one intersection, without the
+        // walk's visitor calls (issue 17: this search runs at every vertex). The same sums as the walk's,
+        // whose transmittance here is exactly 1.
+        ::new (static_cast<void *>(&next)) Intersection();
+        const bool hit = scene.intersect(ray, next);
+        const Emitter *emitter = hit ? next.emitter() : nullptr;
+        const bool left = emitter && leaveOut && leaveOut->connectsTo(*emitter);
+        // After a miss `next` is still invalid, which stands for the environment.
+        if ((!hit || (emitter && !left)) && withinBudget(0, budget))
+            L += misWeightedEmission(scene, ray, next, ref, dirPdf, delta);
+        return L;
+    }
     int crossed = 0;  // surfaces passed before the one visited (every visited surface but a blocker is passed)
     const auto visit = [&](const Intersection &its, const Spectrum &T) {
         const Emitter *emitter = its.emitter();
