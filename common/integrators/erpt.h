@@ -20,8 +20,8 @@
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
 // (false), manifoldPerturbation (false), portalPerturbation (false), lambda (50), manifoldGlossyAngle (1),
 // luminanceSamples (15000: the pilot's BDPT samples); see integrators/mlt.h for those shared with mlt. Beyond
-// Mitsuba: passMutations (2^20), the expected mutations of one pass (render/burst.h), the step in which a
-// time budget is spent.
+// Mitsuba: passMutations (2^20, or kManifoldPassMutations with the manifold perturbation), the expected
+// mutations of one pass (render/burst.h), the step in which a time budget is spent.
 // --spp is seed samples per pixel (rounds of render/burst.h; default: the scene's sampleCount).
 //
 // `mept` (manifold exploration path tracing, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the
@@ -31,6 +31,13 @@
 #include "integrators/mlt.h"
 
 namespace pf {
+
+// The default pass with the manifold perturbation on: its mutations (a Newton walk each, usually two with
+// the reverse walk) cost 5-8 times Veach's perturbations' (glass-egg at 64²: about 4·10^4 mutations per
+// core-second against erpt's 2-3·10^5), so 2^20 mutations would be a 25-30 core-second pass, and a timed
+// render at 1024² would end up to that long before its budget (volumetric-caustic-small, mept --time 60
+// on 2 threads: 49.3 s). 2^17 keeps a pass near render/burst.h's 5 core-seconds.
+constexpr int64_t kManifoldPassMutations = int64_t(1) << 17;
 
 class ERPT final : public PathSpaceIntegrator {
 public:
