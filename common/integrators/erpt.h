@@ -32,12 +32,15 @@
 
 namespace pf {
 
-// The default pass with the manifold perturbation on: its mutations (a Newton walk each, usually two with
-// the reverse walk) cost 5-8 times Veach's perturbations' (glass-egg at 64²: about 4·10^4 mutations per
-// core-second against erpt's 2-3·10^5), so 2^20 mutations would be a 25-30 core-second pass, and a timed
-// render at 1024² would end up to that long before its budget (volumetric-caustic-small, mept --time 60
-// on 2 threads: 49.3 s). 2^17 keeps a pass near render/burst.h's 5 core-seconds.
-constexpr int64_t kManifoldPassMutations = int64_t(1) << 17;
+// The default pass with the manifold perturbation on. Its mutations cost 1.7-3.2 times Veach's perturbations'
+// (bench_manifold --bursts at 64²: 1.2·10^5 and 0.9·10^5 per core-second on volumetric-caustic-small and
+// glass-egg, against erpt's 2.1·10^5 and 3.0·10^5), so a 2^20 pass is 8-11 core-seconds, and more on a loaded
+// machine, where a timed render cannot stop before its first pass: volumetric-caustic-small at 1024², mept
+// --time 60 on 2 threads sharing 2 cores with other work, rendered 117.9 s and 90.2 s (49.3 s on a lighter load).
+// 2^18 rendered 60.3 s there. Smaller passes cost throughput at large films: a pass is split into about
+// kBlocksPerPass tasks whatever its size, each with a film of the whole crop window (2^17: 52.0 s, but about a
+// third fewer mutations per CPU second than 2^20 in the same runs).
+constexpr int64_t kManifoldPassMutations = int64_t(1) << 18;
 
 class ERPT final : public PathSpaceIntegrator {
 public:
