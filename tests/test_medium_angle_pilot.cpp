@@ -89,5 +89,31 @@ TEST(MediumAnglePilot, DetailedBalanceAtThePilotsAngle) {
     EXPECT_GE(mediumChains, 10) << "medium vertices should join chains at the pilot's dtheta";
 }
 
+// manifoldMediumAngle: in degrees, by default manifoldGlossyAngle's value; outside [0, 180) an error naming it.
+TEST(MediumAnglePilot, AngleParameter) {
+    auto scene = loadMLTTestScene("glass-egg-largelight", 8, 4);
+    for (const std::string type : {"mept", "memlt"}) {
+        const auto angle = [&](const std::vector<std::pair<std::string, std::string>> &params) {
+            const auto integrator = makeTestIntegrator(*scene, type, params);
+            return dynamic_cast<const PathSpaceIntegrator &>(*integrator).mediumAngle() * 180 / kPi;
+        };
+        EXPECT_NEAR(angle({}), 1.0, 1e-12) << type;
+        EXPECT_NEAR(angle({{"manifoldGlossyAngle", "3.0"}}), 3.0, 1e-12) << type;
+        EXPECT_NEAR(angle({{"manifoldGlossyAngle", "3.0"}, {"manifoldMediumAngle", "2.5"}}), 2.5, 1e-12) << type;
+        // The message of the error that `value` raises (empty when it is accepted).
+        const auto error = [&](const std::string &value) {
+            std::string message;
+            try {
+                makeTestIntegrator(*scene, type, {{"manifoldMediumAngle", value}});
+            } catch (const SceneError &e) {
+                message = e.what();
+            }
+            return message;
+        };
+        EXPECT_NE(error("-1").find("manifoldMediumAngle"), std::string::npos) << type;
+        EXPECT_NE(error("180").find("manifoldMediumAngle"), std::string::npos) << type;
+    }
+}
+
 }  // namespace
 }  // namespace pf::test
