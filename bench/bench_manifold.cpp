@@ -315,8 +315,8 @@ Params budgetForTime(const Options &o, const pf::Scene &scene, const std::string
     const double budget = o.seconds * o.threads, k1 = bursts ? 0.25 : 16;
     // A burst render's cost at a given numChains depends on its seed: the bursts launched are numChains times
     // the seeds' luminance over the pilot's W, both heavy-tailed on the egg (glass-egg at 64², numChains 0.5:
-    // 50-56 mutations per pixel for seeds 7-10, 67 for the probe seed 99, whose probes alone gave mept 19 of
-    // its 30 CPU s in note 3's runs). Each probe point is therefore the mean over kProbeSeeds seeds.
+    // 50-56 mutations per pixel for seeds 7-10, 67 for the probe seed 99; with that one probe seed mept was
+    // fitted 19 of its 30 CPU s). Each probe point is therefore the mean over kProbeSeeds seeds.
     // CPU seconds summed over the probe renders of seeds kProbeSeed + [from, from + count).
     const auto cpuSum = [&](int from, int count) {
         double sum = 0;
