@@ -9,6 +9,7 @@
 //                  [--ref-spp N]
 //                  [--out DIR] [scene.xml ...]
 //   bench_manifold --sweep-lambda L1,.. [--sweep-length M1,..] [--sweep-seeds N1,..] [same options] [scene ...]
+//   bench_manifold --bursts K [same options] [scene.xml ...]   (what one burst does; 5. below)
 //   bench_manifold --write-references K [--ref-spp N] [--res N] [--threads N] [--references DIR] [scene.xml ...]
 //
 // 1. Table 1, per core (one thread, seeding excluded from the time): `mept` with seed-spp seeds per pixel
@@ -37,6 +38,8 @@
 //    (default DIR bench/references) with its own relMSE estimated from the spread of the K renders
 //    (variance of the mean per pixel and channel over (mean^2 + 1e-2)). Without a reference file the
 //    equal-time part renders one with ref-spp samples per pixel (default 2048) and says so.
+// 5. --bursts K: per burst method, bursts per pixel, energy and pixels covered per burst, CPU time per burst and
+//    acceptance per mutation type (burstStudy).
 // --out writes the reference and each method's last image as EXR. Figures only, never pass/fail.
 #include <algorithm>
 #include <cmath>
@@ -63,13 +66,14 @@ namespace fs = std::filesystem;
 
 constexpr double kEpsilon = 1e-2;  // relMSE's epsilon, as bench::relativeError
 constexpr uint64_t kReferenceSeed = 1000, kRunSeed = 7, kProbeSeed = 99;
+constexpr int kProbeSeeds = 3;  // seeds per probe point of the budget fit (budgetForTime)
 
 struct Options {
     int res = 32, refSpp = 2048, seedSpp = 32, mpp = 32, runs = 3, writeReferences = 0;
     bool table1 = true;
     int threads = 1;
     int64_t chainLength = 1000;
-    double seconds = 8, lambda = 50, glossyAngle = 1;
+    double seconds = 8, lambda = 50, glossyAngle = 1, bursts = 0;
     std::vector<double> sweepLambdas;
     std::vector<int64_t> sweepLengths, sweepSeeds;
     std::vector<std::string> scenes, methods = {"bdpt", "memlt", "erpt", "mept"};
@@ -309,18 +313,29 @@ Params budgetForTime(const Options &o, const pf::Scene &scene, const std::string
             p.spp = std::max<int64_t>(1, std::llround(knob));
     };
     const double budget = o.seconds * o.threads, k1 = bursts ? 0.25 : 16;
+    // A burst render's cost at a given numChains depends on its seed: the bursts launched are numChains times
+    // the seeds' luminance over the pilot's W, both heavy-tailed on the egg (glass-egg at 64², numChains 0.5:
+    // 50-56 mutations per pixel for seeds 7-10, 67 for the probe seed 99; with that one probe seed mept was
+    // fitted 19 of its 30 CPU s). Each probe point is therefore the mean over kProbeSeeds seeds.
+    // CPU seconds summed over the probe renders of seeds kProbeSeed + [from, from + count).
+    const auto cpuSum = [&](int from, int count) {
+        double sum = 0;
+        for (int k = from; k < from + count; ++k) sum += runOnce(o, scene, type, p, kProbeSeed + k, {}).cpuSeconds;
+        return sum;
+    };
     set(k1);
     // The first render of a method is slower (caches, first-touch allocations): a warm-up, not a probe.
     runOnce(o, scene, type, p, kProbeSeed, {});
-    const double t1 = runOnce(o, scene, type, p, kProbeSeed, {}).cpuSeconds;
+    const double t1 = cpuSum(0, kProbeSeeds) / kProbeSeeds;
     // The second probe grows until it takes a quarter of the budget: closer to t1, the slope is noise when
-    // a fixed cost dominates (memlt's seeding).
+    // a fixed cost dominates (memlt's seeding). The growth steps take one seed, the last point all of them.
     double k2 = k1, t2 = t1;
     for (int step = 0; step < 8 && (step == 0 || t2 < budget / 4); ++step) {
         k2 *= 4;
         set(k2);
-        t2 = runOnce(o, scene, type, p, kProbeSeed, {}).cpuSeconds;
+        t2 = cpuSum(0, 1);
     }
+    t2 = (t2 + cpuSum(1, kProbeSeeds - 1)) / kProbeSeeds;
     const double perKnob = t2 > t1 ? (t2 - t1) / (k2 - k1) : t2 / k2, fixed = std::max(0.0, t1 - perKnob * k1);
     set((budget - fixed) / perKnob);
     return p;
@@ -413,11 +428,68 @@ void lambdaSweep(const Options &o, const pf::Scene &scene, const Reference &ref)
             }
 }
 
+// --bursts K: what one burst does, for each burst method at K bursts per pixel (seed-spp seeds, bursts of
+// chain-length, lambda L), one thread: bursts per pixel, the mean energy of a burst (luminance of its
+// deposits, in units of the mean pixel luminance W), the pixels it covers (the participation ratio
+// (sum e)^2 / sum e^2 of its per-pixel energies e: the number of equally lit pixels it amounts to), CPU
+// seconds per burst and the acceptance of each mutation type.
+void burstStudy(const Options &o, const pf::Scene &scene) {
+    std::printf("bursts (one thread; %g bursts/px, %d seeds/px, length %lld, lambda %g)\n", o.bursts, o.seedSpp,
+                static_cast<long long>(o.chainLength), o.lambda);
+    std::printf("method  bursts/px  energy/W  pixels/burst (sd)  CPU ms/burst\n");
+    for (const std::string &type : o.methods) {
+        if (!isBurst(type)) continue;
+        const auto method = integrator(scene, type, {o.lambda, o.bursts, o.chainLength, o.seedSpp, o.glossyAngle});
+        const auto &chains = dynamic_cast<const pf::ChainIntegrator &>(*method);
+        std::vector<pf::SeedingResult> seeding;
+        for (const pf::SeedingTask &task : chains.seedingTasks(scene))
+            seeding.push_back(chains.runSeeding(scene, 0, 1, task));
+        const pf::Normalizer normalizer(std::move(seeding));
+        pf::ImageBlock film = pf::makeFilmBlock(scene);
+        pf::MutationCounts counts = chains.mutationTypes();
+        pf::ChainCounters counters;
+        pf::PCG32 rng;
+        double bursts = 0, energy = 0, spread = 0, spread2 = 0;
+        const std::clock_t cpu = std::clock();
+        for (uint64_t k = 0; k < chains.chainTaskCount(scene, o.seedSpp); ++k) {
+            const pf::ChainTask task = chains.chainTask(scene, normalizer, 1, o.seedSpp, k);
+            uint64_t samples = 0;
+            for (const pf::ChainSeed &seed : chains.taskSeeds(scene, 1, task, samples)) {
+                film.clear();
+                chains.runChain(scene, 1, task, seed, pf::chainDepositScale(chains.chainKind(), seed, task.mutations),
+                                rng, film, counts, counters);
+                double sum = 0, squares = 0;
+                const std::span<const double> splat = film.splatData();
+                for (size_t i = 0; i + 2 < splat.size(); i += 3) {
+                    const double e = (splat[i] + splat[i + 1] + splat[i + 2]) / 3;
+                    sum += e, squares += e * e;
+                }
+                const double pixels = squares > 0 ? sum * sum / squares : 0;
+                bursts += 1, energy += sum, spread += pixels, spread2 += pixels * pixels;
+            }
+        }
+        const double seconds = static_cast<double>(std::clock() - cpu) / CLOCKS_PER_SEC;
+        const double pixels = static_cast<double>(scene.sensor().film().cropWidth()) *
+                              static_cast<double>(scene.sensor().film().cropHeight());
+        const double meanSpread = spread / std::max(1.0, bursts);
+        std::printf("%-7s %9.3f %9.3g %8.2f (%6.2f) %12.3g\n", type.c_str(), bursts / pixels,
+                    energy / std::max(1.0, bursts) / (normalizer.luminance() / pixels), meanSpread,
+                    std::sqrt(std::max(0.0, spread2 / std::max(1.0, bursts) - meanSpread * meanSpread)),
+                    1000 * seconds / std::max(1.0, bursts));
+        for (const pf::MutationCount &c : counts)
+            if (c.proposed > 0)
+                std::printf("        %-14s %llu proposed, %.1f%% accepted\n", c.name.c_str(),
+                            static_cast<unsigned long long>(c.proposed), percent(c.accepted, c.proposed));
+        std::fflush(stdout);
+    }
+}
+
 void benchScene(const Options &o, const std::string &path) {
     std::printf("\n== %s, %d x %d\n", path.c_str(), o.res, o.res);
     const auto scene = bench::loadWithSampleCount(path, o.seedSpp, o.res, "bench_manifold");
     const Reference ref = loadReference(o, path, *scene);
     if (!o.sweepLambdas.empty()) return lambdaSweep(o, *scene, ref);
+    if (o.bursts > 0) return burstStudy(o, *scene);
     if (o.table1) {
         std::printf(
             "Table 1 (one thread; mept: %d seeds/px, 100 mutations/px in bursts of %lld; memlt: %d mutations/px; "
@@ -451,6 +523,7 @@ int main(int argc, char **argv) {
         {"--write-references", [&](const char *v) { o.writeReferences = std::stoi(v); }},
         {"--references", [&](const char *v) { o.references = v; }},
         {"--methods", [&](const char *v) { o.methods = parseList<std::string>(v, +toString); }},
+        {"--bursts", [&](const char *v) { o.bursts = std::stod(v); }},
         {"--table1", [&](const char *v) { o.table1 = std::stoi(v) != 0; }},
         {"--threads", [&](const char *v) { o.threads = std::stoi(v); }},
         {"--out", [&](const char *v) { o.out = v; }}};

@@ -7,6 +7,7 @@
 // Short versions; test_long_manifold.cpp has larger images and more runs.
 #include <gtest/gtest.h>
 
+#include "integrators/erpt.h"
 #include "integrators/lambda_tuning.h"
 #include "path/manifold_perturbation.h"
 #include "support/chain_util.h"
@@ -271,6 +272,34 @@ TEST(ManifoldExploration, PathsSeenThroughGlassInAMediumMoveOnTheFilm) {
     // Only the sources whose move reaches the sensor change the film position: 86 of 223 proposals from 40
     // paths (0 of 192 before).
     EXPECT_GE(moved, paths) << "paths seen through glass in a medium stay in their pixel";
+}
+
+// A time budget is spent in whole passes, so their size is the step by which a timed render misses its
+// budget: with the manifold perturbation (1.7-3.2 times dearer per mutation than Veach's perturbations) the
+// default pass holds kManifoldPassMutations, not erpt's 2^20, at the scene's own size (1024², 64 rounds) as at
+// 64². An explicit passMutations still rules.
+TEST(MEPTPlan, ManifoldPassesAreSmallerThanErpts) {
+    const auto passMutations = [](const Scene &scene, const std::string &name,
+                                  const std::vector<std::pair<std::string, std::string>> &params) {
+        const auto integrator = makeTestIntegrator(scene, name, params);
+        const BurstPlan p = dynamic_cast<const ERPT &>(*integrator).plan(scene, 0);
+        return static_cast<double>(p.pixels) * p.chainsPerPixel * 100.0 / static_cast<double>(p.interleave);
+    };
+    for (const int res : {1024, 64}) {
+        auto scene = loadMLTTestScene("volumetric-caustic-small", res, 64);
+        const double mept = passMutations(*scene, "mept", {}), erpt = passMutations(*scene, "erpt", {});
+        EXPECT_LE(mept, static_cast<double>(kManifoldPassMutations)) << res;
+        EXPECT_LE(passMutations(*scene, "erpt", {{"manifoldPerturbation", "true"}}),
+                  static_cast<double>(kManifoldPassMutations))
+            << res;
+        EXPECT_LE(erpt, static_cast<double>(kDefaultPassMutations)) << res;
+        if (res == 1024) {
+            EXPECT_GT(mept, kManifoldPassMutations / 2.0);  // passes no smaller than they need be
+            EXPECT_GT(erpt, static_cast<double>(kManifoldPassMutations)) << "erpt's passes stay as they were";
+            EXPECT_GT(passMutations(*scene, "mept", {{"passMutations", "1048576"}}),
+                      static_cast<double>(kManifoldPassMutations));
+        }
+    }
 }
 
 }  // namespace

@@ -28,7 +28,8 @@ ERPT::ERPT(const Properties &props, bool manifoldExploration)
     maxChains_ = props.getInt("maxChains", 0);
     chainLength_ = props.getInt("chainLength", 100);
     luminanceSamples_ = props.getInt("luminanceSamples", 15000);
-    passMutations_ = props.getInt("passMutations", kDefaultPassMutations);
+    passMutations_ =
+        props.getInt("passMutations", usesManifoldPerturbation() ? kManifoldPassMutations : kDefaultPassMutations);
     if (passMutations_ < 1) props.fail("passMutations", "must be at least 1");
     if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
     if (!(numChains_ > 0) || !std::isfinite(numChains_)) props.fail("numChains", "must be positive");

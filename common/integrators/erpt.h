@@ -20,8 +20,8 @@
 // causticPerturbation (true), multiChainPerturbation (true), bidirectionalMutation (false), lensSubpathMutation
 // (false), manifoldPerturbation (false), portalPerturbation (false), lambda (50), manifoldGlossyAngle (1),
 // luminanceSamples (15000: the pilot's BDPT samples); see integrators/mlt.h for those shared with mlt. Beyond
-// Mitsuba: passMutations (2^20), the expected mutations of one pass (render/burst.h), the step in which a
-// time budget is spent.
+// Mitsuba: passMutations (2^20, or kManifoldPassMutations with the manifold perturbation), the expected
+// mutations of one pass (render/burst.h), the step in which a time budget is spent.
 // --spp is seed samples per pixel (rounds of render/burst.h; default: the scene's sampleCount).
 //
 // `mept` (manifold exploration path tracing, [TR §8]; ALGORITHMS.md §5.4) is this integrator with the
@@ -31,6 +31,16 @@
 #include "integrators/mlt.h"
 
 namespace pf {
+
+// The default pass with the manifold perturbation on. Its mutations cost 1.7-3.2 times Veach's perturbations'
+// (bench_manifold --bursts at 64²: 1.2·10^5 and 0.9·10^5 per core-second on volumetric-caustic-small and
+// glass-egg, against erpt's 2.1·10^5 and 3.0·10^5), so a 2^20 pass is 8-11 core-seconds, and more on a loaded
+// machine, where a timed render cannot stop before its first pass: volumetric-caustic-small at 1024², mept
+// --time 60 on 2 threads sharing 2 cores with other work, rendered 117.9 s and 90.2 s (49.3 s on a lighter load).
+// 2^18 rendered 60.3 s there. Smaller passes cost throughput at large films: a pass is split into about
+// kBlocksPerPass tasks whatever its size, each with a film of the whole crop window (2^17: 52.0 s, but about a
+// third fewer mutations per CPU second than 2^20 in the same runs).
+constexpr int64_t kManifoldPassMutations = int64_t(1) << 18;
 
 class ERPT final : public PathSpaceIntegrator {
 public:

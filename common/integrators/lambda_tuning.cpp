@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "integrators/pilot_chains.h"
 #include "path/path_chain.h"
-#include "render/normalizer.h"
 #include "scene/scene.h"
 
 namespace pf {
@@ -21,17 +21,7 @@ constexpr double kMinLambda = 1, kMaxLambda = 1e5;
 double tuneLambda(const Scene &scene, const PathSpaceIntegrator &integrator, uint64_t pilotSeed,
                   const std::vector<SeedCandidate> &pool) {
     if (!integrator.usesManifoldPerturbation()) return integrator.lambda();
-    // The chains' starts in proportion to their energy (systematic resampling, as for long chains).
-    SeedingResult all;
-    all.candidates = pool;
-    for (const SeedCandidate &c : pool) {
-        if (all.depthLuminance.empty()) all.depthLuminance.push_back(0);
-        all.depthLuminance[0] += c.weight;
-    }
-    std::vector<SeedingResult> results;
-    results.push_back(std::move(all));
-    const Normalizer normalizer(std::move(results));
-    const std::vector<ChainSeed> starts = normalizer.resample(pilotSeed, kTuneStream, kChains);
+    const std::vector<MutablePath> starts = pilotChainStarts(scene, integrator, pilotSeed, pool, kTuneStream, kChains);
     if (starts.empty()) return integrator.lambda();
 
     const std::string manifold = mutationName(MutationType::Manifold);
@@ -39,10 +29,7 @@ double tuneLambda(const Scene &scene, const PathSpaceIntegrator &integrator, uin
     PCG32 rng(pilotSeed, kTuneStream);
     double logLambda = std::log(integrator.lambda());
     std::vector<double> history;  // log λ after each update
-    for (const ChainSeed &start : starts) {
-        MutablePath path;
-        integrator.bdpt().regenerate(scene, pilotSeed, start.record,
-                                     [&](const StrategySample &x) { path = MutablePath(*x.path); });
+    for (MutablePath path : starts) {
         for (int b = 0; b < kBatches && path.length() > 0; ++b) {
             const MutationSet set = integrator.mutations(scene, std::exp(logLambda));
             PathChain chain(scene, set, integrator.minVertices(), integrator.maxVertices(), nowhere, 0.0);

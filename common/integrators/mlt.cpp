@@ -62,6 +62,9 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
+    const double mediumAngle = props.getFloat("manifoldMediumAngle", glossyAngle);
+    if (!(mediumAngle >= 0 && mediumAngle < 180)) props.fail("manifoldMediumAngle", "must lie in [0, 180) degrees");
+    mediumAngle_ = mediumAngle * kPi / 180;
     mediumChains_ = props.getBool("mediumChains", true);
     // The portal perturbation's angles: the paper's 2^-8 and 2^-4 radians (Otsu et al., §5).
     portalR1_ = props.getFloat("portalR1", 1.0 / 256);
@@ -112,7 +115,7 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 break;
             case MutationType::Manifold:
                 set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_,
-                                                               mediumChains_));
+                                                               mediumChains_, mediumAngle_));
                 break;
             case MutationType::MediumDistance:
                 set.add(std::make_unique<MediumDistancePerturbation>());

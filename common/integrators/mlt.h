@@ -21,7 +21,10 @@
 //                                  the mean turn of a microfacet normal per perturbation (Mitsuba's starting
 //                                  value); 0 leaves every glossy vertex non-specular
 //   mediumChains (true)            whether medium vertices may join the manifold perturbation's chains (§6.7),
-//                                  classified with the same angle against their phase function's median
+//                                  classified with manifoldMediumAngle against their phase function's median
+//   manifoldMediumAngle (= manifoldGlossyAngle)  dtheta of medium vertices, in degrees (the mean turn of a
+//                                  scattering angle per perturbation; integrators/medium_angle_pilot.h
+//                                  measures it)
 //   mediumDistancePerturbation (= manifoldPerturbation)  the medium-distance perturbation
 //   twoStage (false)               two-stage MLT (render/two_stage.h): a first stage's low-resolution image
 //                                  I steers the chains, whose target becomes L / I
@@ -63,6 +66,8 @@ public:
     // lambda = "auto": the jump size is tuned by the luminance pilot (integrators/erpt.h).
     bool lambdaAuto() const { return lambdaAuto_; }
     double lambda() const { return lambda_; }
+    // dtheta of medium vertices in the manifold perturbation's classification, in radians.
+    double mediumAngle() const { return mediumAngle_; }
     bool usesManifoldPerturbation() const;
     const BDPT &bdpt() const { return *bdpt_; }
     // Chains leave paths with fewer vertices to the direct component.
@@ -80,7 +85,7 @@ private:
     std::unique_ptr<BDPT> bdpt_, direct_;
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
-    double lambda_ = 50, glossyAngle_ = 0;
+    double lambda_ = 50, glossyAngle_ = 0, mediumAngle_ = 0;
     bool mediumChains_ = true;
     double portalR1_ = 0, portalR2_ = 0;
     bool lambdaAuto_ = false;

@@ -157,8 +157,13 @@ Vec3 rayDirectionTo(const Scene &scene, const PathVertex &from, const Vec3 &p) {
 
 }  // namespace
 
-ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains)
-    : lambda_(lambda), glossyAngle_(glossyAngle), mediumChains_(mediumChains), walk_(scene) {}
+ManifoldPerturbation::ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains,
+                                           double mediumAngle)
+    : lambda_(lambda),
+      glossyAngle_(glossyAngle),
+      mediumChains_(mediumChains),
+      mediumAngle_(mediumAngle < 0 ? glossyAngle : mediumAngle),
+      walk_(scene) {}
 
 // rho = G(u <-> ... <-> l) / (|cos_u| J(u -> l)) of y's chain between `end` and `moving` (header). G is
 // taken over the chain listed from u: generalizedGeometry(x_1 .. x_k) is the Jacobian of projected solid angle
@@ -237,12 +242,12 @@ double ManifoldPerturbation::measureConversion(const PathView &y, const Strategy
 
 double ManifoldPerturbation::chainProbability(const PathVertex &v) const {
     if (!isNonSpecular(v)) return 1.0;
-    if (!(glossyAngle_ > 0)) return 0.0;
     // A medium vertex: the Henyey-Greenstein median scattering angle against dtheta ([TR A1], §6.6).
     if (v.type == VertexType::Medium)
-        return mediumChains_ && v.medium
-                   ? specularProbability(hgQuantileAngle(v.medium->phase().meanCosine()), glossyAngle_)
+        return mediumChains_ && v.medium && mediumAngle_ > 0
+                   ? specularProbability(hgQuantileAngle(v.medium->phase().meanCosine()), mediumAngle_)
                    : 0.0;
+    if (!(glossyAngle_ > 0)) return 0.0;
     if (v.type != VertexType::Surface) return 0.0;
     const BSDF *bsdf = v.its.bsdf();
     if (!(bsdf->flags() & BSDFFlags::Glossy) || (bsdf->flags() & BSDFFlags::Diffuse)) return 0.0;

@@ -67,8 +67,9 @@
 //
 // Medium vertices in chains (§6.7, [TR §7]): a medium vertex joins a chain with probability
 // psi_spec = 1 - P_nonspec(theta_q(g), dtheta), theta_q the median scattering angle of its Henyey-Greenstein phase
-// function (g = its mean cosine) and dtheta the same `manifoldGlossyAngle` as for surfaces (Jakob measures a mean
-// change of scattering angle in a pilot instead), unless `mediumChains` is false. It keeps its offset (the
+// function (g = its mean cosine) and dtheta the integrators' `manifoldMediumAngle` (by default the same
+// `manifoldGlossyAngle` as for surfaces; Jakob measures a mean change of scattering angle in a pilot, which
+// integrators/medium_angle_pilot.h does), unless `mediumChains` is false. It keeps its offset (the
 // scattering direction in the frame of the incoming one) and its distance to its predecessor in the direction
 // of the walk: propagation and the traced second chain place it at that held distance (placeHeld(), no
 // free-flight sampling, so its incoming edge has no free-flight probability in T), and the walk holds it too.
@@ -109,8 +110,10 @@ namespace pf {
 class ManifoldPerturbation final : public Mutation {
 public:
     // lambda: the jump size (§6.5); glossyAngle: dtheta of the classification in radians (0: no glossy or medium
-    // vertex joins a chain); mediumChains: whether medium vertices may join chains (§6.7).
-    ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains = true);
+    // vertex joins a chain); mediumChains: whether medium vertices may join chains (§6.7); mediumAngle: dtheta of
+    // medium vertices in radians (negative: glossyAngle; integrators/medium_angle_pilot.h measures one).
+    ManifoldPerturbation(const Scene &scene, double lambda, double glossyAngle, bool mediumChains = true,
+                         double mediumAngle = -1);
     MutationType type() const override { return MutationType::Manifold; }
     bool applies(const PathView &x) const override;
     bool sample(const Scene &scene, Sampler &sampler, const MutablePath &x, MutablePath &y,
@@ -183,6 +186,7 @@ private:
 
     double lambda_, glossyAngle_;
     bool mediumChains_;
+    double mediumAngle_;
     ManifoldWalk walk_;
     mutable Statistics stats_;
 };
