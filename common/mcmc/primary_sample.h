@@ -36,8 +36,7 @@ struct MutationSizes {
 // (a chain steps every coordinate it reads, and the logarithm showed in profiles; issue 17).
 class SmallStep {
 public:
-    explicit SmallStep(const MutationSizes &sizes)
-        : high_(sizes.high), logRatio_(std::log(sizes.high / sizes.low)) {}
+    explicit SmallStep(const MutationSizes &sizes) : high_(sizes.high), logRatio_(std::log(sizes.high / sizes.low)) {}
     double operator()(double u, PCG32 &rng) const;
 
 private:

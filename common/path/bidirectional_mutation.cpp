@@ -1,16 +1,25 @@
 #include "path/bidirectional_mutation.h"
 
+#include <bit>
 #include <climits>
+#include <cstdint>
 
 namespace pf {
 
 namespace {
 
+// 2^e, the value std::ldexp(1.0, e) gives, built from its bits where it is a normal number: the mutation takes
+// dozens per step, and the library call showed in profiles (issue 17).
+double powerOfTwo(int e) {
+    if (e < -1022 || e > 1023) return std::ldexp(1.0, e);
+    return std::bit_cast<double>(static_cast<uint64_t>(e + 1023) << 52);
+}
+
 // sum_{j = j0}^{j1} 2^-j.
 double halfPowers(int64_t j0, int64_t j1) {
     return j1 < j0 ? 0.0
-                   : std::ldexp(1.0, static_cast<int>(std::min<int64_t>(1 - j0, 1100))) -
-                         std::ldexp(1.0, static_cast<int>(std::max<int64_t>(-j1, -1100)));
+                   : powerOfTwo(static_cast<int>(std::min<int64_t>(1 - j0, 1100))) -
+                         powerOfTwo(static_cast<int>(std::max<int64_t>(-j1, -1100)));
 }
 
 // The two-tailed geometric distribution with ratio 1/2 around `centre`, restricted to [lo, hi].
@@ -33,7 +42,7 @@ public:
     }
 
 private:
-    double weight(int k) const { return std::ldexp(1.0, -std::min(std::abs(k - c_), 1100)); }
+    double weight(int k) const { return powerOfTwo(-std::min(std::abs(k - c_), 1100)); }
     int c_, lo_, hi_;
     double norm_ = 0;
 };

@@ -185,8 +185,8 @@ public:
     // MutationRecord): x's (`xTerms`) where y's vertex and its neighbours, or an edge's two ends, are x's,
     // that is below vertex l and edge l and beyond vertex and edge l + added + 1; the others evaluated on y.
     // A mutation keeps the positions of vertices l and l + added + 1 (it may change what else they hold).
-    void update(const Scene &scene, const PathView &y, std::optional<TransportMode> mode, const ContributionTerms &xTerms,
-                int l, int m, int added);
+    void update(const Scene &scene, const PathView &y, std::optional<TransportMode> mode,
+                const ContributionTerms &xTerms, int l, int m, int added);
     Spectrum product() const;
 
 private:
