@@ -7,7 +7,8 @@
 // so that BDPT's filtered samples and the chains' unfiltered splats estimate the same pixel integrals.
 // 1. Per core: `pssmlt` and `mmlt` with Mitsuba's defaults, run as the embedded renderer runs them
 //    (seeding tasks, the normalizer, chain tasks for mpp mutations per pixel, default 64) on one thread:
-//    mutations/s of the chain tasks, and per mutation type the proposals, acceptances and rate.
+//    mutations per second and per CPU second (comparable on a shared machine) of the chain tasks, and per
+//    mutation type the proposals, acceptances and rate.
 // 2. Equal time: a BDPT reference with ref-spp samples per pixel (default 4096), then K runs (default 3,
 //    different seeds) of bdpt, pssmlt and mmlt with a budget of S seconds each (default 10, seeding
 //    included) on `threads` threads (default 1), and their relative mean squared error against the
@@ -46,14 +47,16 @@ void throughput(const pf::Scene &scene, const pf::ChainIntegrator &integrator, i
     const double seeding = secondsSince(start);
     pf::ChainImage image(pf::makeFilmBlock(scene));
     start = std::chrono::steady_clock::now();
+    const double cpuStart = bench::processCpuSeconds();
     for (uint64_t i = 0; i < integrator.chainTaskCount(scene, mpp); ++i)
         pf::mergeChainResult(
             image, pf::runChainTask(scene, integrator, 1, integrator.chainTask(scene, normalizer, 1, mpp, i)));
-    const double chains = secondsSince(start);
-    std::printf("%s: seeding %.2f s (b = %.5g); %llu mutations in %.2f s on one core: %.4g mutations/s\n",
-                integrator.name().c_str(), seeding, normalizer.luminance(),
-                static_cast<unsigned long long>(image.mutations), chains,
-                static_cast<double>(image.mutations) / chains);
+    const double chains = secondsSince(start), cpu = bench::processCpuSeconds() - cpuStart;
+    std::printf(
+        "%s: seeding %.2f s (b = %.5g); %llu mutations in %.2f s on one core: %.4g mutations/s, %.4g per CPU "
+        "second\n",
+        integrator.name().c_str(), seeding, normalizer.luminance(), static_cast<unsigned long long>(image.mutations),
+        chains, static_cast<double>(image.mutations) / chains, static_cast<double>(image.mutations) / cpu);
     std::printf("  %-10s %12s %12s %11s\n", "mutation", "proposed", "accepted", "acceptance");
     for (const pf::MutationCount &c : image.counts)
         std::printf("  %-10s %12llu %12llu %10.2f%%\n", c.name.c_str(), static_cast<unsigned long long>(c.proposed),

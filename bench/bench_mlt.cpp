@@ -7,8 +7,9 @@
 //
 // 1. Per core, at N x N (default 64): `mlt` with mpp mutations per pixel (default 64) and `erpt` with
 //    seed-spp seed samples per pixel (default 16), both with Mitsuba's defaults otherwise, run as the
-//    embedded renderer runs them (seeding tasks, the normalizer, chain tasks) on one thread: mutations/s
-//    of the chain tasks, and per mutation type the proposals, acceptances and acceptance rate.
+//    embedded renderer runs them (seeding tasks, the normalizer, chain tasks) on one thread: mutations per
+//    second and per CPU second (comparable on a shared machine) of the chain tasks, and per mutation type the
+//    proposals, acceptances and acceptance rate.
 // 2. Equal time at N x N: a BDPT reference with ref-spp samples per pixel (default 4096), then K runs
 //    (default 3, different seeds) of bdpt, mlt and erpt with about S seconds each (default 10) on
 //    `threads` threads (default: all cores), and their relative mean squared error against the
@@ -62,17 +63,19 @@ double secondsSince(std::chrono::steady_clock::time_point t) {
 
 // Seeding, normalizer and chain tasks on the calling thread, as the embedded renderer runs them.
 pf::ChainImage runChains(const pf::Scene &scene, const pf::ChainIntegrator &integrator, int64_t spp,
-                         double &chainSeconds) {
+                         double &chainSeconds, double &chainCpuSeconds) {
     std::vector<pf::SeedingResult> seeds;
     for (const pf::SeedingTask &t : integrator.seedingTasks(scene))
         seeds.push_back(integrator.runSeeding(scene, 0, 1, t));
     const pf::Normalizer normalizer(std::move(seeds));
     pf::ChainImage image(pf::makeFilmBlock(scene));
     const auto start = std::chrono::steady_clock::now();
+    const double cpuStart = bench::processCpuSeconds();
     for (uint64_t i = 0; i < integrator.chainTaskCount(scene, spp); ++i)
         pf::mergeChainResult(
             image, pf::runChainTask(scene, integrator, 1, integrator.chainTask(scene, normalizer, 1, spp, i)));
     chainSeconds = secondsSince(start);
+    chainCpuSeconds = bench::processCpuSeconds() - cpuStart;
     return image;
 }
 
@@ -108,12 +111,12 @@ int main(int argc, char **argv) {
     const auto scene = bench::loadWithSampleCount(o.scene, o.seedSpp, o.res, "bench_mlt");
     for (const std::string type : {"mlt", "erpt"}) {
         const auto integrator = makeIntegrator(*scene, type);
-        double seconds = 0;
+        double seconds = 0, cpu = 0;
         const pf::ChainImage image = runChains(*scene, dynamic_cast<const pf::ChainIntegrator &>(*integrator),
-                                               type == "mlt" ? o.mpp : o.seedSpp, seconds);
-        std::printf("%s: %llu mutations in %.2f s on one core: %.4g mutations/s\n", type.c_str(),
+                                               type == "mlt" ? o.mpp : o.seedSpp, seconds, cpu);
+        std::printf("%s: %llu mutations in %.2f s on one core: %.4g mutations/s, %.4g per CPU second\n", type.c_str(),
                     static_cast<unsigned long long>(image.mutations), seconds,
-                    static_cast<double>(image.mutations) / seconds);
+                    static_cast<double>(image.mutations) / seconds, static_cast<double>(image.mutations) / cpu);
         std::printf("  %-14s %12s %12s %11s\n", "mutation", "proposed", "accepted", "acceptance");
         for (const pf::MutationCount &c : image.counts)
             std::printf("  %-14s %12llu %12llu %10.2f%%\n", c.name.c_str(), static_cast<unsigned long long>(c.proposed),

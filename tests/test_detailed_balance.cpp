@@ -10,7 +10,9 @@
 // * every sampled proposal has T(x -> y) > 0, and the reverse move has T(y -> x) > 0 except where it is
 //   structurally impossible (checked case by case below);
 // * pi(x) T(x -> y) a(x -> y) = pi(y) T(y -> x) a(y -> x) with the core's acceptance, mixture selection
-//   probabilities included.
+//   probabilities included;
+// * the move changes the path only where its record says, so that f from x's factors outside that range
+//   and y's inside it (ContributionTerms, as chains evaluate proposals) has the bits of f evaluated anew.
 //
 // The manifold perturbation (ALGORITHMS.md §6.5) gets the same checks, and where its chains are specular,
 // the finite-difference check of the one vertex that moves freely: x'_m's area density from the direction
@@ -199,9 +201,18 @@ TEST_P(DetailedBalance, HoldsForSampledProposals) {
             MutablePath y;
             MutationRecord record;
             if (!mutation.sample(*scene, sampler, x, y, record)) continue;
-            const double piY = chainContribution(*scene, y).luminance();
+            const Spectrum fY = chainContribution(*scene, y);
+            const double piY = fY.luminance();
             if (!(piY > 0)) continue;
             ++proposals;
+            // A chain re-evaluates only the factors of f that the move changed, by its record (path_chain.h):
+            // the move must leave the rest of the path as it was, and f comes out with the same bits.
+            ContributionTerms xTerms, yTerms;
+            xTerms.evaluate(*scene, x, TransportMode::Radiance);
+            yTerms.update(*scene, y, TransportMode::Radiance, xTerms, record.l, record.m, record.added);
+            const Spectrum kept = yTerms.product();
+            EXPECT_TRUE(kept.r == fY.r && kept.g == fY.g && kept.b == fY.b)
+                << "f from the kept factors differs: path " << i << " proposal " << j;
             crossing += crossesInChain(y, record, c.type);
             unlike += crossingEdgesUnlikeConnections(*scene, y, record);
             const double txy = set.selectionProbability(x, k) * mutation.density(*scene, x, y, record);

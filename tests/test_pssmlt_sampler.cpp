@@ -32,12 +32,13 @@ TEST(PrimarySample, SmallStepKernel) {
     std::vector<double> observed(2 * kBinsPerSign, 0.0), expected(2 * kBinsPerSign, kDraws / (2.0 * kBinsPerSign));
     PCG32 rng(7, 3);
     const double logRange = std::log(kSizes.high / kSizes.low);
+    const SmallStep smallStep(kSizes);
     for (int i = 0; i < kDraws; ++i) {
         // Starting points near the ends exercise the wrap.
         const double u = i % 4 == 0   ? rng.nextDouble() * 1e-3
                          : i % 4 == 1 ? 1 - rng.nextDouble() * 1e-3
                                       : rng.nextDouble();
-        const double v = smallStep(u, kSizes, rng);
+        const double v = smallStep(u, rng);
         ASSERT_GE(v, 0.0);
         ASSERT_LT(v, 1.0);
         ASSERT_GT(smallStepDensity(u, v), 0.0) << u << " -> " << v;

@@ -64,7 +64,7 @@ BDPT::BDPT(const Properties &props) {
 }
 
 void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, const StrategyVisitor &visit,
-                    std::optional<Strategy> only) const {
+                    std::optional<Strategy> only, int minDepth) const {
     // A path of n vertices has n - 1 edges; the emitter walk takes one vertex more than it can connect,
     // so that its last edge can still cross the lens (t = 0).
     const int maxVertices = maxDepth_ < 0 ? -1 : maxDepth_ + 1;
@@ -82,9 +82,11 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
         for (int s = 2; s <= light.size(); ++s) sensorDirect.push_back(sampler.next2D());
     }
 
+    // A path's depth is s + t - 1 plus the pass-through surfaces its edges cross (path.h).
+    const bool crossings = scene.hasPassThroughSurfaces();
     const auto wanted = [&](int s, int t) {
         return (!only || *only == Strategy(s, t)) && (maxDepth_ < 0 || s + t - 1 <= maxDepth_) &&
-               (mis_.lightImage || t >= 2);
+               (crossings || s + t - 1 >= minDepth) && (mis_.lightImage || t >= 2);
     };
     // s + t - 1 <= maxDepth above prunes strategies early; the index-matched surfaces that the path's
     // edges cross count too (Mitsuba's bdpt_proc.cpp lets a connection bridge only maxDepth - s - t + 1
@@ -92,8 +94,8 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     // weights need no change.
     const auto report = [&](int s, int t) {
         // Without pass-through surfaces no edge crosses one, and the depth is the s + t - 1 bounded above.
-        const int depth = scene.hasPassThroughSurfaces() ? pathDepth(path) : path.length() - 1;
-        if (maxDepth_ >= 0 && depth > maxDepth_) return;
+        const int depth = crossings ? pathDepth(path) : path.length() - 1;
+        if ((maxDepth_ >= 0 && depth > maxDepth_) || depth < minDepth) return;
         path.densities(scene, mis_.sampleDirect, w.densities);
         const double weight = misWeight(w.densities, s, mis_);
         visit({s, t, depth, path.raster(), weight, path.contribution() * weight, &path});

@@ -56,9 +56,12 @@ public:
 
     // Every strategy of the pixel sample at `raster`, or only `only`; the random numbers drawn are the
     // same either way: the sensor walk, the emitter walk, then two numbers per direct connection
-    // (s = 1 for each sensor vertex, then t = 1 for each emitter vertex).
+    // (s = 1 for each sensor vertex, then t = 1 for each emitter vertex). Paths of a depth below minDepth
+    // are not visited, and not even built where no edge can cross a pass-through surface (the Markov
+    // chains leave the direct component's paths to it: connections whose result they dropped were a fifth
+    // of a PSSMLT mutation's work; issue 17).
     void evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, const StrategyVisitor &visit,
-                  std::optional<Strategy> only = {}) const;
+                  std::optional<Strategy> only = {}, int minDepth = 0) const;
     // Regenerates the path of a record from the render's seed (as the render loop draws the sample) and
     // visits it; false if that strategy carries nothing for this sample.
     bool regenerate(const Scene &scene, uint64_t seed, const PathRecord &record, const StrategyVisitor &visit) const;

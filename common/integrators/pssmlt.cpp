@@ -16,9 +16,12 @@ PrimarySampleIntegrator::ChainSetup PSSMLT::setup(const Scene &scene, const Chai
     ChainSetup s;
     s.psi = [this, &scene, size](Sampler &u, SplatList &out) {
         const Vec2 unit = u.next2D(), position(unit.x * size.x, unit.y * size.y);
-        bdpt().evaluate(scene, u, position, [&](const StrategySample &x) {
-            if (x.depth >= minDepth()) out.push_back({x.raster, x.value});
-        });
+        bdpt().evaluate(
+            scene, u, position,
+            [&](const StrategySample &x) {
+                out.push_back({x.raster, x.value});
+            },
+            {}, minDepth());
     };
     s.prefix = {raster.x / size.x, raster.y / size.y};
     // The target's normalization constant is b̂, the sum over all depths.

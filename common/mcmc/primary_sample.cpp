@@ -4,8 +4,8 @@
 
 namespace pf {
 
-double smallStep(double u, const MutationSizes &sizes, PCG32 &rng) {
-    const double offset = sizes.high * std::exp(-std::log(sizes.high / sizes.low) * rng.nextDouble());
+double SmallStep::operator()(double u, PCG32 &rng) const {
+    const double offset = high_ * std::exp(-logRatio_ * rng.nextDouble());
     double v = rng.nextDouble() < 0.5 ? u + offset : u - offset;
     // Wrap onto the circle; a tiny negative v rounds to 1 when shifted, and then wraps to 0.
     if (v < 0) v += 1;
@@ -54,9 +54,9 @@ double PrimarySample::next1D() {
     if (!proposing_) return c.value;
     // Catch up with the accepted transitions this coordinate missed.
     if (c.time < lastLarge_) c = {fresh(), lastLarge_};
-    for (; c.time < accepted_; ++c.time) c.value = smallStep(c.value, sizes_, *rng_);
+    for (; c.time < accepted_; ++c.time) c.value = smallStep_(c.value, *rng_);
     backup_.emplace_back(index, c);
-    c = {large_ ? fresh() : smallStep(c.value, sizes_, *rng_), accepted_ + 1};
+    c = {large_ ? fresh() : smallStep_(c.value, *rng_), accepted_ + 1};
     return c.value;
 }
 

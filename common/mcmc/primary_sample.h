@@ -17,6 +17,7 @@
 // being evaluated they come from a `source` sampler instead, so that a chain can start from a path that
 // an independent sampler produced (the seeding candidates, ALGORITHMS.md §2.4).
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -31,12 +32,20 @@ struct MutationSizes {
     double high = 1.0 / 64.0;   // s2
 };
 
-// One small step of coordinate u: u +/- s2 * exp(-ln(s2 / s1) * xi), wrapped into [0, 1).
-double smallStep(double u, const MutationSizes &sizes, PCG32 &rng);
+// Kelemen's small step: u +/- s2 * exp(-ln(s2 / s1) * xi), wrapped into [0, 1). ln(s2 / s1) is taken once
+// (a chain steps every coordinate it reads, and the logarithm showed in profiles; issue 17).
+class SmallStep {
+public:
+    explicit SmallStep(const MutationSizes &sizes) : high_(sizes.high), logRatio_(std::log(sizes.high / sizes.low)) {}
+    double operator()(double u, PCG32 &rng) const;
+
+private:
+    double high_, logRatio_;
+};
 
 class PrimarySample final : public Sampler {
 public:
-    explicit PrimarySample(const MutationSizes &sizes) : sizes_(sizes) {}
+    explicit PrimarySample(const MutationSizes &sizes) : smallStep_(sizes) {}
 
     // Starts a chain on the state `prefix` followed by the numbers `source` produces, for as many
     // coordinates as the next evaluation of Psi reads. The state is current once that evaluation is done
@@ -65,7 +74,7 @@ private:
     };
     double fresh();
 
-    MutationSizes sizes_;
+    SmallStep smallStep_;
     std::vector<Coordinate> u_;
     std::vector<std::pair<size_t, Coordinate>> backup_;  // coordinates of x the proposal changed
     uint64_t accepted_ = 0;                              // transitions accepted so far: the current state's time

@@ -1,16 +1,25 @@
 #include "path/bidirectional_mutation.h"
 
+#include <bit>
 #include <climits>
+#include <cstdint>
 
 namespace pf {
 
 namespace {
 
+// 2^e, the value std::ldexp(1.0, e) gives, built from its bits where it is a normal number: the mutation takes
+// dozens per step, and the library call showed in profiles (issue 17).
+double powerOfTwo(int e) {
+    if (e < -1022 || e > 1023) return std::ldexp(1.0, e);
+    return std::bit_cast<double>(static_cast<uint64_t>(e + 1023) << 52);
+}
+
 // sum_{j = j0}^{j1} 2^-j.
 double halfPowers(int64_t j0, int64_t j1) {
     return j1 < j0 ? 0.0
-                   : std::ldexp(1.0, static_cast<int>(std::min<int64_t>(1 - j0, 1100))) -
-                         std::ldexp(1.0, static_cast<int>(std::max<int64_t>(-j1, -1100)));
+                   : powerOfTwo(static_cast<int>(std::min<int64_t>(1 - j0, 1100))) -
+                         powerOfTwo(static_cast<int>(std::max<int64_t>(-j1, -1100)));
 }
 
 // The two-tailed geometric distribution with ratio 1/2 around `centre`, restricted to [lo, hi].
@@ -33,7 +42,7 @@ public:
     }
 
 private:
-    double weight(int k) const { return std::ldexp(1.0, -std::min(std::abs(k - c_), 1100)); }
+    double weight(int k) const { return powerOfTwo(-std::min(std::abs(k - c_), 1100)); }
     int c_, lo_, hi_;
     double norm_ = 0;
 };
@@ -55,14 +64,13 @@ SplitRange splitRange(int n, int m, int added) { return {0, m == n ? added - 1 :
 BidirectionalMutation::BidirectionalMutation(int minVertices, int maxVertices)
     : minVertices_(minVertices), maxVertices_(maxVertices < 0 ? INT_MAX : maxVertices) {}
 
-std::vector<int> BidirectionalMutation::deletionPositions(const PathView &x, int kd, int ka) const {
+void BidirectionalMutation::deletionPositions(const PathView &x, int kd, int ka, std::vector<int> &positions) const {
     const int n = x.length();
     int lo = -1, hi = n - kd;
     if (kd == 1 || ka == 1) ++lo, --hi;
-    std::vector<int> positions;
+    positions.clear();
     for (int l = lo; l <= hi; ++l)
         if ((l < 0 || keepable(x.vertex(l))) && (l + kd >= n || keepable(x.vertex(l + kd)))) positions.push_back(l);
-    return positions;
 }
 
 double BidirectionalMutation::choiceProbability(const PathView &x, int l, int kd, int added) const {
@@ -70,7 +78,8 @@ double BidirectionalMutation::choiceProbability(const PathView &x, int l, int kd
     const double pLength = TwoTailedGeometric(n, minVertices_, maxVertices_).pmf(length);
     const int minDeletion = std::max(length == n ? 2 : 1, n - length + 1);
     const double pDeletion = TwoTailedGeometric(2, minDeletion, n + 1).pmf(kd);
-    const std::vector<int> positions = deletionPositions(x, kd, added + 1);
+    thread_local std::vector<int> positions;
+    deletionPositions(x, kd, added + 1, positions);
     const bool found = std::find(positions.begin(), positions.end(), l) != positions.end();
     return found ? pLength * pDeletion / static_cast<double>(positions.size()) : 0.0;
 }
@@ -82,7 +91,8 @@ bool BidirectionalMutation::sample(const Scene &scene, Sampler &sampler, const M
     const int minDeletion = std::max(length == n ? 2 : 1, n - length + 1);
     const int kd = TwoTailedGeometric(2, minDeletion, n + 1).sample(sampler.next1D());
     const int ka = length - n + kd;
-    const std::vector<int> positions = deletionPositions(x, kd, ka);
+    thread_local std::vector<int> positions;
+    deletionPositions(x, kd, ka, positions);
     const double uPosition = sampler.next1D(), uSplit = sampler.next1D();
     if (positions.empty()) return false;
     const int l = positions[std::min(positions.size() - 1, static_cast<size_t>(uPosition * positions.size()))];
@@ -104,8 +114,10 @@ double BidirectionalMutation::density(const Scene &scene, const PathView &x, con
     const double choice = choiceProbability(x, l, kd, added);
     const SplitRange split = splitRange(n, m, added);
     if (!(choice > 0) || split.count() <= 0) return 0.0;
-    std::vector<double> pFwd, pRev;
-    evalDensities(scene, y, pFwd, pRev);
+    // Only the regenerated vertices' densities enter (walkDensity); buffers kept per thread, as a chain calls
+    // this twice per step.
+    thread_local std::vector<double> pFwd, pRev;
+    evalDensities(scene, y, l + 1, l + added, pFwd, pRev);
     double sum = 0;
     for (int s = split.first; s <= split.last; ++s)
         if (isJunction(y, l + s)) sum += walkDensity(scene, y, l, s, l + added + 1, pFwd, pRev);

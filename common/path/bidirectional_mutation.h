@@ -34,8 +34,9 @@ private:
     // The probability of the discrete choices that delete kd edges at l and add `added` vertices to x,
     // before the split.
     double choiceProbability(const PathView &x, int l, int kd, int added) const;
-    // The positions l at which kd edges may be deleted from x when ka edges replace them.
-    std::vector<int> deletionPositions(const PathView &x, int kd, int ka) const;
+    // The positions l at which kd edges may be deleted from x when ka edges replace them, into `positions`
+    // (a buffer the caller keeps: no allocation per step).
+    void deletionPositions(const PathView &x, int kd, int ka, std::vector<int> &positions) const;
 
     int minVertices_, maxVertices_;
 };

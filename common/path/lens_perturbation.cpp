@@ -15,7 +15,7 @@ bool LensPerturbation::sample(const Scene &scene, Sampler &sampler, const Mutabl
 
 double LensPerturbation::density(const Scene &scene, const PathView &x, const PathView &y,
                                  const MutationRecord &) const {
-    return applies(x) ? sensorCascadeDensity(scene, offset_, nullptr, scale_, x, y) : 0.0;
+    return sensorCascadeDensity(scene, offset_, nullptr, scale_, x, y);
 }
 
 }  // namespace pf

@@ -23,8 +23,10 @@ double LensSubpathMutation::density(const Scene &scene, const PathView &x, const
     const SensorChains cx = sensorChains(x), cy = sensorChains(y);
     const int n = x.length();
     if (cx.chains != 1 || cy.chains != 1 || cx.b != cy.b || y.length() != n) return 0.0;
-    std::vector<double> pFwd, pRev;
-    evalDensities(scene, y, pFwd, pRev);
+    // The regenerated vertices x_b .. x_{n-1} (walkDensity); buffers kept per thread, as a chain calls this twice per
+    // step.
+    thread_local std::vector<double> pFwd, pRev;
+    evalDensities(scene, y, cx.b, n - 1, pFwd, pRev);
     return walkDensity(scene, y, cx.b - 1, 0, n, pFwd, pRev);
 }
 

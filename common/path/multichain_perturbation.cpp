@@ -18,7 +18,7 @@ bool MultiChainPerturbation::sample(const Scene &scene, Sampler &sampler, const 
 
 double MultiChainPerturbation::density(const Scene &scene, const PathView &x, const PathView &y,
                                        const MutationRecord &) const {
-    return applies(x) ? sensorCascadeDensity(scene, offset_, &angle_, scale_, x, y) : 0.0;
+    return sensorCascadeDensity(scene, offset_, &angle_, scale_, x, y);
 }
 
 }  // namespace pf

@@ -49,8 +49,19 @@ double importanceToCanonical(const Scene &scene, const PathView &path, int i) {
 }
 
 bool isNonSpecular(const PathVertex &v) {
-    if (!v.isConnectable()) return false;
-    return v.isEndpointNode() || v.type == VertexType::Medium || (v.its.bsdf()->flags() & BSDFFlags::Smooth) != 0;
+    // isConnectable(), by type: chains classify every vertex many times per step (issue 17).
+    if (v.delta) return false;
+    switch (v.type) {
+        case VertexType::Surface:
+            return (v.its.bsdf()->flags() & BSDFFlags::Smooth) != 0;
+        case VertexType::EmitterNode:
+            return !v.hasDeltaDirection();
+        case VertexType::SensorNode:
+        case VertexType::Medium:
+            return true;
+        default:
+            return false;
+    }
 }
 
 const char *mutationName(MutationType type) {
@@ -75,28 +86,34 @@ const char *mutationName(MutationType type) {
     return "";
 }
 
-double MutationSet::selectionProbability(const PathView &x, size_t k) const {
-    if (!mutations_[k]->applies(x)) return 0.0;
-    double applicable = 0;
-    for (size_t j = 0; j < mutations_.size(); ++j) applicable += mutations_[j]->applies(x) ? weights_[j] : 0;
-    return weights_[k] / applicable;
+uint64_t MutationSet::applicable(const PathView &x) const {
+    uint64_t mask = 0;
+    for (size_t k = 0; k < mutations_.size(); ++k)
+        if (mutations_[k]->applies(x)) mask |= uint64_t(1) << k;
+    return mask;
 }
 
-int MutationSet::select(const PathView &x, double u) const {
-    std::vector<int> applicable;
+double MutationSet::selectionProbability(uint64_t mask, size_t k) const {
+    if (!(mask >> k & 1)) return 0.0;
+    double total = 0;
+    for (size_t j = 0; j < mutations_.size(); ++j) total += mask >> j & 1 ? weights_[j] : 0;
+    return weights_[k] / total;
+}
+
+int MutationSet::select(uint64_t mask, double u) const {
+    if (mask == 0) return -1;
     double total = 0;
     for (size_t k = 0; k < mutations_.size(); ++k)
-        if (mutations_[k]->applies(x)) {
-            applicable.push_back(static_cast<int>(k));
-            total += weights_[k];
-        }
-    if (applicable.empty()) return -1;
+        if (mask >> k & 1) total += weights_[k];
     double below = 0;
-    for (const int k : applicable) {
-        below += weights_[static_cast<size_t>(k)];
-        if (u * total < below) return k;
+    int last = -1;
+    for (size_t k = 0; k < mutations_.size(); ++k) {
+        if (!(mask >> k & 1)) continue;
+        below += weights_[k];
+        last = static_cast<int>(k);
+        if (u * total < below) return last;
     }
-    return applicable.back();
+    return last;
 }
 
 bool extendWalk(const Scene &scene, Sampler &sampler, TransportMode mode, MutablePath &y, int from, int steps) {

@@ -104,6 +104,7 @@ public:
 // those that apply (the portal perturbation's paper mixes them unequally, path/portal_perturbation.h).
 class MutationSet {
 public:
+    // At most 64 mutations (applicable()'s mask).
     void add(std::unique_ptr<Mutation> mutation, double weight = 1.0) {
         mutations_.push_back(std::move(mutation));
         weights_.push_back(weight);
@@ -111,10 +112,15 @@ public:
     bool empty() const { return mutations_.empty(); }
     size_t size() const { return mutations_.size(); }
     const Mutation &operator[](size_t k) const { return *mutations_[k]; }
-    // Probability that the step from x selects mutation k.
-    double selectionProbability(const PathView &x, size_t k) const;
-    // The mutation a uniform number u selects at x, or -1 when none applies.
-    int select(const PathView &x, double u) const;
+    // The mutations that apply to x, as a mask with bit k for mutation k. A chain keeps the mask with its
+    // state: applicability walks the path, and each step needs it of x and of y (issue 17).
+    uint64_t applicable(const PathView &x) const;
+    // Probability that the step from a state whose applicable mutations are `mask` selects mutation k.
+    double selectionProbability(uint64_t mask, size_t k) const;
+    double selectionProbability(const PathView &x, size_t k) const { return selectionProbability(applicable(x), k); }
+    // The mutation a uniform number u selects among `mask`, or -1 when none applies.
+    int select(uint64_t mask, double u) const;
+    int select(const PathView &x, double u) const { return select(applicable(x), u); }
 
 private:
     std::vector<std::unique_ptr<Mutation>> mutations_;

@@ -1,5 +1,7 @@
 #include "path/path.h"
 
+#include <algorithm>
+
 #include "emitter/emitter.h"
 #include "scene/scene.h"
 
@@ -296,27 +298,85 @@ void JoinedPath::densities(const Scene &scene, bool sampleDirect, PathDensities 
 }
 
 Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode) {
+    ContributionTerms terms;
+    terms.evaluate(scene, path, mode);
+    return terms.product();
+}
+
+void ContributionTerms::resize(int n) {
+    vertex_.resize(static_cast<size_t>(n));
+    cosine_.resize(static_cast<size_t>(n));
+    edge_.resize(static_cast<size_t>(std::max(n - 1, 0)));
+}
+
+void ContributionTerms::evaluateVertex(const Scene &scene, const PathView &path, int i,
+                                       std::optional<TransportMode> mode) {
+    const PathVertex &v = path.vertex(i);
+    const TransportMode m = mode.value_or(v.walkMode);
+    const int back = m == TransportMode::Importance ? -1 : 1;  // where the walk of m comes from
+    const PathVertex &pred = path.vertex(i + back), &succ = path.vertex(i - back);
+    vertex_[static_cast<size_t>(i)] = v.eval(scene, &pred, succ, m);
+    cosine_[static_cast<size_t>(i)] = pred.isSupernode() ? 1.0 : v.cosine(normalize(pred.position() - v.position()));
+}
+
+void ContributionTerms::evaluateEdge(const PathView &path, int i) {
+    edge_[static_cast<size_t>(i)] = edgeTerm(path.vertex(i), path.vertex(i + 1), path.edge(i));
+}
+
+void ContributionTerms::evaluate(const Scene &scene, const PathView &path, std::optional<TransportMode> mode) {
     const int n = path.length();
-    const PathVertex &emitterSide = PathVertex::emitterSupernode(), &sensorSide = PathVertex::sensorSupernode();
-    Spectrum f = emitterSide.eval(scene, nullptr, path.vertex(0), TransportMode::Importance) *
-                 sensorSide.eval(scene, nullptr, path.vertex(n - 1), TransportMode::Radiance);
+    resize(n);
+    endpoints_ = PathVertex::emitterSupernode().eval(scene, nullptr, path.vertex(0), TransportMode::Importance) *
+                 PathVertex::sensorSupernode().eval(scene, nullptr, path.vertex(n - 1), TransportMode::Radiance);
+    for (int i = 0; i < n; ++i) evaluateVertex(scene, path, i, mode);
+    for (int i = 0; i + 1 < n; ++i) evaluateEdge(path, i);
+}
+
+void ContributionTerms::update(const Scene &scene, const PathView &y, std::optional<TransportMode> mode,
+                               const ContributionTerms &xTerms, int l, int m, int added) {
+    const int n = y.length(), end = l + added + 1, shift = m - end;  // y's vertex j > end is x's j + shift
+    resize(n);
+    endpoints_ = PathVertex::emitterSupernode().eval(scene, nullptr, y.vertex(0), TransportMode::Importance) *
+                 PathVertex::sensorSupernode().eval(scene, nullptr, y.vertex(n - 1), TransportMode::Radiance);
     for (int i = 0; i < n; ++i) {
-        const PathVertex &v = path.vertex(i);
-        const TransportMode m = mode.value_or(v.walkMode);
-        const int back = m == TransportMode::Importance ? -1 : 1;  // where the walk of m comes from
-        const PathVertex &pred = path.vertex(i + back), &succ = path.vertex(i - back);
-        f *= v.eval(scene, &pred, succ, m);
-        if (!pred.isSupernode()) f *= v.cosine(normalize(pred.position() - v.position()));
+        if (i >= l && i <= end) {
+            evaluateVertex(scene, y, i, mode);
+            continue;
+        }
+        const size_t from = static_cast<size_t>(i < l ? i : i + shift);
+        vertex_[static_cast<size_t>(i)] = xTerms.vertex_[from];
+        cosine_[static_cast<size_t>(i)] = xTerms.cosine_[from];
     }
-    for (int i = 0; i + 1 < n; ++i) f *= edgeTerm(path.vertex(i), path.vertex(i + 1), path.edge(i));
+    for (int i = 0; i + 1 < n; ++i) {
+        if (i >= l && i < end) {
+            evaluateEdge(y, i);
+            continue;
+        }
+        edge_[static_cast<size_t>(i)] = xTerms.edge_[static_cast<size_t>(i < l ? i : i + shift)];
+    }
+}
+
+Spectrum ContributionTerms::product() const {
+    // In the order of the factors' definition (ALGORITHMS.md §1.1): the vertices, then the edges.
+    Spectrum f = endpoints_;
+    for (size_t i = 0; i < vertex_.size(); ++i) {
+        f *= vertex_[i];
+        f *= cosine_[i];
+    }
+    for (const Spectrum &e : edge_) f *= e;
     return f;
 }
 
 void evalDensities(const Scene &scene, const PathView &path, std::vector<double> &pFwd, std::vector<double> &pRev) {
+    evalDensities(scene, path, 0, path.length() - 1, pFwd, pRev);
+}
+
+void evalDensities(const Scene &scene, const PathView &path, int first, int last, std::vector<double> &pFwd,
+                   std::vector<double> &pRev) {
     const int n = path.length();
     pFwd.resize(static_cast<size_t>(n));
     pRev.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) {
+    for (int i = std::max(first, 0); i <= std::min(last, n - 1); ++i) {
         // x_i as the emitter walk reaches it from x_{i-1} (x_{-1}: the supernode, which has no predecessor),
         // and as the sensor walk reaches it from x_{i+1}.
         const PathVertex *fromEmitter = i >= 1 ? &path.vertex(i - 2) : nullptr;

@@ -174,7 +174,37 @@ int pathDepth(const PathView &path);
 // estimates, with the densities of evalDensities.
 Spectrum contribution(const Scene &scene, const PathView &path, std::optional<TransportMode> mode = {});
 
+// contribution()'s factors, kept one by one: a Markov chain whose mutation replaced a range of the path
+// re-evaluates only the factors that depend on it and takes the others from the state it left (path_chain.h;
+// issue 17). f is their product in contribution()'s order, so it has the same bits either way.
+class ContributionTerms {
+public:
+    // Every factor of `path`, each vertex evaluated in `mode` or, without one, in its walk's mode.
+    void evaluate(const Scene &scene, const PathView &path, std::optional<TransportMode> mode = {});
+    // The factors of y, which is x with vertices l + 1 .. m - 1 replaced by `added` new ones (path/mutation.h:
+    // MutationRecord): x's (`xTerms`) where y's vertex and its neighbours, or an edge's two ends, are x's,
+    // that is below vertex l and edge l and beyond vertex and edge l + added + 1; the others evaluated on y.
+    // A mutation keeps the positions of vertices l and l + added + 1 (it may change what else they hold).
+    void update(const Scene &scene, const PathView &y, std::optional<TransportMode> mode,
+                const ContributionTerms &xTerms, int l, int m, int added);
+    Spectrum product() const;
+
+private:
+    void evaluateVertex(const Scene &scene, const PathView &path, int i, std::optional<TransportMode> mode);
+    void evaluateEdge(const PathView &path, int i);
+    void resize(int n);
+
+    Spectrum endpoints_;            // the supernodes' terms
+    std::vector<Spectrum> vertex_;  // EVAL at x_i in the walk's mode
+    std::vector<double> cosine_;    // D at x_i towards the walk's predecessor (1 where that is a supernode)
+    std::vector<Spectrum> edge_;    // edgeTerm of edge i
+};
+
 // EVALPDF at every vertex of the path: pFwd[i] = p->(x_i) from the emitter side, pRev[i] = p<-(x_i).
 void evalDensities(const Scene &scene, const PathView &path, std::vector<double> &pFwd, std::vector<double> &pRev);
+// The same at x_first .. x_last only (pFwd and pRev still get an entry per vertex; the others are left as they
+// were): a mutation's density needs those of the vertices it created.
+void evalDensities(const Scene &scene, const PathView &path, int first, int last, std::vector<double> &pFwd,
+                   std::vector<double> &pRev);
 
 }  // namespace pf

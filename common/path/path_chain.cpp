@@ -35,12 +35,22 @@ MutationCounts PathChain::mutationTypes(const std::vector<MutationType> &types) 
     return counts;
 }
 
-void PathChain::evaluate(State &state) const {
+void PathChain::evaluate(State &state, const MutationRecord *record) const {
     // Vertices as Mitsuba counts them: the index-matched crossings are vertices of its paths (path.h).
     const int n = pathDepth(state.path) + 1;
     const bool inRange = n >= minVertices_ && (maxVertices_ < 0 || n <= maxVertices_);
-    state.f = inRange ? chainContribution(scene_, state.path) : Spectrum(0.0);
+    state.f = Spectrum(0.0);
+    if (inRange) {
+        // The canonical measure (mutation.h: chainContribution).
+        if (record)
+            state.terms.update(scene_, state.path, TransportMode::Radiance, current_.terms, record->l, record->m,
+                               record->added);
+        else
+            state.terms.evaluate(scene_, state.path, TransportMode::Radiance);
+        state.f = state.terms.product();
+    }
     state.target = state.f.luminance() * (firstStage_ ? firstStage_->targetFactor(state.path.raster()) : 1.0);
+    state.applicable = state.target > 0 ? mutations_.applicable(state.path) : 0;
 }
 
 double PathChain::start(const PathView &x) {
@@ -52,7 +62,7 @@ double PathChain::start(const PathView &x) {
 Proposal PathChain::propose(PCG32 &rng) {
     ChainSampler sampler(rng);
     const MutablePath &x = current_.path;
-    const int k = mutations_.select(x, sampler.next1D());
+    const int k = mutations_.select(current_.applicable, sampler.next1D());
     Proposal p;
     p.target = 0;
     p.type = k < 0 ? static_cast<int>(mutations_.size()) : k;
@@ -60,12 +70,13 @@ Proposal PathChain::propose(PCG32 &rng) {
     const Mutation &mutation = mutations_[static_cast<size_t>(k)];
     MutationRecord record;
     if (!mutation.sample(scene_, sampler, x, proposed_.path, record)) return p;
-    evaluate(proposed_);
+    evaluate(proposed_, &record);
     if (!(proposed_.target > 0) || !std::isfinite(proposed_.target)) return p;
     const MutablePath &y = proposed_.path;
-    p.forward = mutations_.selectionProbability(x, static_cast<size_t>(k)) * mutation.density(scene_, x, y, record);
-    p.backward =
-        mutations_.selectionProbability(y, static_cast<size_t>(k)) * mutation.density(scene_, y, x, record.reverse());
+    p.forward = mutations_.selectionProbability(current_.applicable, static_cast<size_t>(k)) *
+                mutation.density(scene_, x, y, record);
+    p.backward = mutations_.selectionProbability(proposed_.applicable, static_cast<size_t>(k)) *
+                 mutation.density(scene_, y, x, record.reverse());
     // A proposal the mutation cannot have made (T(x -> y) = 0, from round-off at the edge of its support) or
     // with a non-finite density carries no information: it is rejected.
     if (p.forward > 0 && std::isfinite(p.forward) && std::isfinite(p.backward)) p.target = proposed_.target;

@@ -38,11 +38,14 @@ public:
 private:
     struct State {
         MutablePath path;
+        ContributionTerms terms;  // f's factors
         Spectrum f;
         double target = 0;
+        uint64_t applicable = 0;  // MutationSet::applicable(path) where target > 0
     };
-    // Fills f and the target of state.path.
-    void evaluate(State &state) const;
+    // Fills the terms, f, the target and the applicable mutations of state.path; with `record`, state.path is
+    // the current path mutated by it and only the terms that the mutation changed are evaluated.
+    void evaluate(State &state, const MutationRecord *record = nullptr) const;
     void deposit(const State &state, double weight);
 
     const Scene &scene_;

@@ -210,7 +210,9 @@ double sensorCascadeDensity(const Scene &scene, const ReciprocalKernel &offset, 
                             const PerturbationScale &scale, const PathView &x, const PathView &y) {
     const SensorChains cx = sensorChains(x), cy = sensorChains(y);
     const int n = x.length();
-    if (cx.chains == 0 || cx.b != cy.b || cx.chains != cy.chains || y.length() != n) return 0.0;
+    // The lens perturbation applies to one chain, the multi-chain perturbation to more.
+    const bool applies = angle ? cx.chains >= 2 : cx.chains == 1;
+    if (!applies || cx.b != cy.b || cx.chains != cy.chains || y.length() != n) return 0.0;
     const Vec2 &rasterX = x.vertex(n - 1).ps.uv, &rasterY = y.vertex(n - 1).ps.uv;
     // Uniform raster positions give the sensor's direction density; an offset density p per unit film
     // area is p * filmArea times that.

@@ -94,7 +94,8 @@ SensorChains sensorChains(const PathView &x);
 bool sampleSensorCascade(const Scene &scene, Sampler &sampler, const ReciprocalKernel &offset,
                          const ReciprocalKernel *angle, const MutablePath &x, const SensorChains &chains,
                          MutablePath &y);
-// Its density T(x -> y) (sensor walk: already canonical), zero if y does not have x's structure.
+// Its density T(x -> y) (sensor walk: already canonical), zero if y does not have x's structure or the
+// perturbation does not apply to x (one chain without `angle`, several with it).
 double sensorCascadeDensity(const Scene &scene, const ReciprocalKernel &offset, const ReciprocalKernel *angle,
                             const PerturbationScale &scale, const PathView &x, const PathView &y);
 

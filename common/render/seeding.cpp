@@ -52,10 +52,13 @@ void forEachSeedStrategy(const Scene &scene, const SeedingConfig &config, uint64
                          const std::function<void(const StrategySample &, double)> &fn) {
     IndependentSampler sampler(seed, pixel, sampleIndex);
     const Vec2 raster = samplePixel(scene.sensor().film(), pixel, sampler);
-    config.bdpt->evaluate(scene, sampler, raster, [&](const StrategySample &x) {
-        const double weight = x.value.luminance() * scale;
-        if (x.depth >= config.minDepth && weight > 0 && std::isfinite(weight)) fn(x, weight);
-    });
+    config.bdpt->evaluate(
+        scene, sampler, raster,
+        [&](const StrategySample &x) {
+            const double weight = x.value.luminance() * scale;
+            if (weight > 0 && std::isfinite(weight)) fn(x, weight);
+        },
+        {}, config.minDepth);
 }
 
 void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
