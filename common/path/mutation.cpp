@@ -136,12 +136,13 @@ bool extendWalk(const Scene &scene, Sampler &sampler, TransportMode mode, Mutabl
         if (v.type == VertexType::SensorNode)
             v.ps.uv = Vec2(sampler.next1D() * film.cropWidth(), sampler.next1D() * film.cropHeight());
         const PathVertex *pred = v.isSupernode() ? nullptr : &y.vertex(cur - dir);
-        PathVertex succ;
+        // Sampled straight into y (sampleNext overwrites it whole; a failed walk's y is unused) instead of
+        // copying a 496-byte vertex per step (issue 17).
+        PathVertex &succ = y.vertex(cur + dir);
         PathEdge edge;
         if (!v.sampleNext(scene, sampler, mode, pred, edge, succ)) return false;
         // A sensor walk that left the scene reached the environment's emitter node: it cannot go on.
         if (succ.isEndpointNode() && !v.isSupernode() && k + 1 < steps) return false;
-        y.vertex(cur + dir) = succ;
         if (!v.isSupernode() && !succ.isSupernode()) y.edge(std::min(cur, cur + dir)) = edge;
     }
     return true;

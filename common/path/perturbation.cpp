@@ -99,22 +99,15 @@ bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const P
     for (int cur = from;; cur += dir) {
         const int next = cur + dir;
         const PathVertex &expected = x.vertex(next);
-        PathVertex succ;
-        PathEdge edge;
-        if (next == to && held > 0) {
-            if (!placeHeld(scene, mode, y.vertex(cur), d, held, edge, succ)) return false;
-            y.edge(std::min(cur, next)) = edge;
-            y.vertex(next) = succ;
-            return true;
-        }
+        // Built in y itself (perturb() and placeHeld() overwrite both whole; a failed proposal is not used)
+        // instead of copying a 496-byte vertex per step (issue 17).
+        PathVertex &succ = y.vertex(next);
+        PathEdge &edge = y.edge(std::min(cur, next));
+        if (next == to && held > 0) return placeHeld(scene, mode, y.vertex(cur), d, held, edge, succ);
         if (!y.vertex(cur).perturb(scene, sampler, mode, d, edge, succ) || succ.isEndpointNode()) return false;
         const bool surfaceExpected = expected.type == VertexType::Surface || expected.type == VertexType::EmitterNode;
         if ((succ.type == VertexType::Surface) != surfaceExpected) return false;
-        y.edge(std::min(cur, next)) = edge;
-        if (next == to) {
-            y.vertex(next) = succ;
-            return true;
-        }
+        if (next == to) return true;
         // A specular vertex: continue through the same kind of Dirac lobe.
         const uint32_t lobe = diracLobe(expected);
         if (succ.type != VertexType::Surface || !(succ.its.bsdf()->flags() & lobe) || !sameSide(succ.its, succ.its.wi))
@@ -128,7 +121,6 @@ bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const P
         succ.delta = true;
         succ.woLocal = bs.wo;
         d = succ.its.toWorld(bs.wo);
-        y.vertex(next) = succ;
     }
 }
 

@@ -54,9 +54,10 @@ Vec3 rayDirection(const Scene &scene, const PathVertex &from, const PathVertex &
 // up; the sensor walk down), through the specular vertices that x has strictly between them, each with the
 // same kind of Dirac lobe as in x. Fills y's vertices and edges on the way, up to vertex `to`, which must be
 // a scattering vertex of the same type as x's (a surface also stands in for an emitter node at index 0, to
-// be cast by the caller). False when the configuration changes or the ray leaves the scene. With held > 0,
-// vertex `to` is a medium vertex of a manifold chain (ALGORITHMS.md §6.7): it is placed at distance `held` from
-// its predecessor along the propagated direction instead of by free-flight sampling (placeHeld()).
+// be cast by the caller). False when the configuration changes or the ray leaves the scene (y then holds
+// part of the attempt and is not to be used). With held > 0, vertex `to` is a medium vertex of a manifold
+// chain (ALGORITHMS.md §6.7): it is placed at distance `held` from its predecessor along the propagated
+// direction instead of by free-flight sampling (placeHeld()).
 bool propagate(const Scene &scene, Sampler &sampler, TransportMode mode, const PathView &x, MutablePath &y, int from,
                int to, Vec3 d, double held = 0.0);
 // The medium that point p lies in, seen from vertex `from` along the straight line to it: from's medium towards p,
