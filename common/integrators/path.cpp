@@ -89,10 +89,7 @@ Spectrum directLight(const Scene &scene, const DirectSample &ds, const Spectrum 
                      double scatterPdf, const Ray &shadow, const Medium *medium, bool trackMedia, int budget) {
     if (value.isBlack() || f.isBlack()) return {};
     Spectrum T;
-    if (!scene.hasPassThroughSurfaces() && !(trackMedia && medium)) {
-        // Nothing to pass through and no medium: the occlusion query itself, without the walk's layers.
-        T = Spectrum(scene.occluded(shadow) ? 0.0 : 1.0);
-    } else if (budget < 0 || !scene.hasPassThroughSurfaces()) {
+    if (budget < 0 || !scene.hasPassThroughSurfaces()) {
         T = transmittance(scene, shadow, medium, trackMedia);
     } else {
         int crossed = 0;  // a shadow ray that is not blocked visits only surfaces it passes

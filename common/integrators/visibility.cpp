@@ -23,16 +23,16 @@ Spectrum throughFirstSurface(const Scene &scene, const Ray &ray, const SurfaceVi
 
 // Medium segments run between the points where the walk meets surfaces (not the offset origins of the
 // rays spawned there), so that media are not thinned by the ray epsilon at every crossing.
-Spectrum walk(const Scene &scene, Ray ray, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit,
+Spectrum walk(const Scene &scene, const Ray &first, bool trackMedia, const Medium *medium, const SurfaceVisitor *visit,
               Intersection *firstHit) {
-    // Nothing to pass through and no medium to attenuate: a plain occlusion query answers it.
-    const bool firstSurfaceEnds = !scene.hasPassThroughSurfaces() && !(trackMedia && medium);
-    if (!visit && !firstHit && firstSurfaceEnds) return scene.occluded(ray) ? Spectrum(0.0) : Spectrum(1.0);
-    if (firstSurfaceEnds) {
-        if (firstHit) return throughFirstSurface(scene, ray, visit, *firstHit);
+    // Nothing to pass through and no medium to attenuate (transmittance() answers that case with a plain
+    // occlusion query): the first surface ends the walk.
+    if (!scene.hasPassThroughSurfaces() && !(trackMedia && medium)) {
+        if (firstHit) return throughFirstSurface(scene, first, visit, *firstHit);
         Intersection local;
-        return throughFirstSurface(scene, ray, visit, local);
+        return throughFirstSurface(scene, first, visit, local);
     }
+    Ray ray = first;  // respawned at every crossing
     Spectrum T(1.0);
     Vec3 start = ray.o;
     Intersection local;
@@ -67,13 +67,11 @@ Spectrum nullTransmittance(const Intersection &its) {
     return bsdf->eval(ctx, its, its.wi, -its.wi, Measure::Discrete);
 }
 
-Spectrum transmittance(const Scene &scene, Ray ray) { return walk(scene, ray, false, nullptr, nullptr, nullptr); }
-
-Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, bool trackMedia) {
+Spectrum walkedTransmittance(const Scene &scene, const Ray &ray, const Medium *medium, bool trackMedia) {
     return walk(scene, ray, trackMedia, medium, nullptr, nullptr);
 }
 
-Spectrum walkTransmittance(const Scene &scene, Ray ray, const Medium *medium, const SurfaceVisitor &visit,
+Spectrum walkTransmittance(const Scene &scene, const Ray &ray, const Medium *medium, const SurfaceVisitor &visit,
                            bool trackMedia, Intersection *firstHit) {
     return walk(scene, ray, trackMedia, medium, &visit, firstHit);
 }

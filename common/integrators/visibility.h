@@ -7,22 +7,29 @@
 #include "core/function_ref.h"
 #include "core/spectrum.h"
 #include "scene/intersection.h"
+#include "scene/scene.h"
 
 namespace pf {
 
-class Scene;
 class Medium;
 
-// Fraction of light arriving at `to` from `ray.o` along `ray` (tmax set to stop short of the target):
-// zero if an opaque surface is in the way, otherwise the product of the Null-lobe transmittances of
-// the surfaces crossed. Media are ignored (the `path` integrator does not render them).
-Spectrum transmittance(const Scene &scene, Ray ray);
+// The walk behind transmittance() where it has surfaces to pass through or a medium to attenuate.
+Spectrum walkedTransmittance(const Scene &scene, const Ray &ray, const Medium *medium, bool trackMedia);
 
-// The same with media: the ray starts in `medium` (nullptr = vacuum), each segment is attenuated by
-// the medium it lies in, and crossing the boundary of a medium switches media (mediumAfter).
-// ray.d must be a unit vector, so that ray parameters are lengths.
-// With trackMedia = false media are ignored (the `path` integrator), as in the two-argument form.
-Spectrum transmittance(const Scene &scene, Ray ray, const Medium *medium, bool trackMedia = true);
+// Fraction of light arriving along `ray` (tmax set to stop short of the target), starting in `medium`
+// (nullptr = vacuum): zero if an opaque surface is in the way, otherwise the product of the Null-lobe
+// transmittances of the surfaces crossed and of each segment's medium (crossing a medium's boundary switches
+// media, mediumAfter). ray.d must be a unit vector, so that ray parameters are lengths. With trackMedia =
+// false media are ignored (the `path` integrator). Inline for its common case, a plain occlusion query
+// (nothing to pass through, no medium): `path` asks it at every vertex, and the call into the walk cost some
+// 70 instructions a shadow ray (issue 17).
+inline Spectrum transmittance(const Scene &scene, const Ray &ray, const Medium *medium, bool trackMedia = true) {
+    if (!scene.hasPassThroughSurfaces() && !(trackMedia && medium)) return Spectrum(scene.occluded(ray) ? 0.0 : 1.0);
+    return walkedTransmittance(scene, ray, medium, trackMedia);
+}
+
+// The same without media.
+inline Spectrum transmittance(const Scene &scene, const Ray &ray) { return transmittance(scene, ray, nullptr, false); }
 
 // Called for each surface a walk reaches, with the transmittance from the ray origin up to it.
 using SurfaceVisitor = FunctionRef<void(const Intersection &its, const Spectrum &T)>;
@@ -33,7 +40,7 @@ using SurfaceVisitor = FunctionRef<void(const Intersection &its, const Spectrum 
 // (infinite rays: out of the scene), or zero when a surface without a Null lobe is in the way.
 // `firstHit`, if given, receives the first surface along the ray (invalid if none): the next vertex of a
 // path that continues along it, so callers need not trace the same ray again.
-Spectrum walkTransmittance(const Scene &scene, Ray ray, const Medium *medium, const SurfaceVisitor &visit,
+Spectrum walkTransmittance(const Scene &scene, const Ray &ray, const Medium *medium, const SurfaceVisitor &visit,
                            bool trackMedia = true, Intersection *firstHit = nullptr);
 
 // Null-lobe transmittance of the surface at `its` for a ray passing straight through it
