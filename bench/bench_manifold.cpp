@@ -2,7 +2,8 @@
 // statistics of Table 1 for MEPT and MEMLT, chain throughput per core, and the error at equal time of MEPT,
 // MEMLT, ERPT and BDPT against a long BDPT reference.
 //
-//   bench_manifold [--res N] [--time S] [--runs K] [--threads N] [--seed-spp N] [--mpp N] [--lambda L|auto]
+//   bench_manifold [--res N] [--time S] [--runs K] [--first-run F] [--threads N] [--seed-spp N] [--mpp N] [--lambda
+//   L|auto]
 //                  [--chain-length M] [--methods bdpt,memlt,erpt,mept,mept-nomedia,mept-nodistance] [--table1 0|1]
 //                  [--references DIR]
 //                  [--glossy-angle D] (manifoldGlossyAngle of mept and memlt in degrees, default 1)
@@ -18,19 +19,19 @@
 //    100; tune it with --sweep-lambda, acceptance moves with the walk's code): mutations, acceptance,
 //    manifold walks per mutation, walks converged, mean Newton iterations, mean and largest specular chain,
 //    reverse walks and non-reversible proposals, mutations per CPU second.
-// 2. Equal time at N x N (default 32): K runs (default 3, seeds 7, 8, ...) per method on `threads` threads
-//    (default 1), each with a budget fitted to S CPU seconds per thread (default 8). CPU time, not wall
-//    time, because this machine is shared (wall time would charge a method for the other processes), and a
-//    fitted budget, not a clock, because erpt and mept bursts have none: a burst is never cut, and a second
-//    pass over the seeds would count their energy twice (README "Status"). The budget is bdpt's samples
-//    per pixel, memlt's mutations per pixel, or the bursts per pixel (numChains) of erpt and mept at
-//    seed-spp seeds per pixel (default 32, TORUS's row of Table 8.1) and chain-length mutations per burst;
-//    probe renders fit CPU time = fixed cost + cost per unit x budget. Each method's mean wall and CPU
-//    time are printed, and relMSE x CPU time / (S x threads) next to relMSE, which corrects what remains of
-//    a miss for an unbiased method (its error falls as 1 / time).
-//    relMSE is the mean over pixels and channels of (x - r)^2 / (r^2 + 1e-2) against the reference r, also
-//    without the 0.1% worst pixels ("trim"); the reference's own relMSE (from the spread of its runs) is
-//    printed with it: a run's expected relMSE is its own plus the reference's.
+// 2. Equal time at N x N (default 32): K runs (default 3, seeds 7 + F, 8 + F, ...; F splits the runs between
+//    processes, e.g. one per core of a bigger machine, whose summaries are then averaged by hand) per method on
+//    `threads` threads (default 1), each with a budget fitted to S CPU seconds per thread (default 8). CPU time, not
+//    wall time, because this machine is shared (wall time would charge a method for the other processes), and a fitted
+//    budget, not a clock, because erpt and mept bursts have none: a burst is never cut, and a second pass over the
+//    seeds would count their energy twice (README "Status"). The budget is bdpt's samples per pixel, memlt's mutations
+//    per pixel, or the bursts per pixel (numChains) of erpt and mept at seed-spp seeds per pixel (default 32, TORUS's
+//    row of Table 8.1) and chain-length mutations per burst; probe renders fit CPU time = fixed cost + cost per unit x
+//    budget. Each method's mean wall and CPU time are printed, and relMSE x CPU time / (S x threads) next to relMSE,
+//    which corrects what remains of a miss for an unbiased method (its error falls as 1 / time). relMSE is the mean
+//    over pixels and channels of (x - r)^2 / (r^2 + 1e-2) against the reference r, also without the 0.1% worst pixels
+//    ("trim"); the reference's own relMSE (from the spread of its runs) is printed with it: a run's expected relMSE is
+//    its own plus the reference's.
 // 3. --sweep-lambda: the equal-time runs of `mept` alone for every seeds per pixel, chain length and lambda
 //    given, with acceptance and the walk statistics (the seeds tune lambda in 50-500 for 72-78% acceptance).
 // 4. --write-references K: the reference of each scene, the mean of K independent BDPT renders with
@@ -69,7 +70,7 @@ constexpr uint64_t kReferenceSeed = 1000, kRunSeed = 7, kProbeSeed = 99;
 constexpr int kProbeSeeds = 3;  // seeds per probe point of the budget fit (budgetForTime)
 
 struct Options {
-    int res = 32, refSpp = 2048, seedSpp = 32, mpp = 32, runs = 3, writeReferences = 0;
+    int res = 32, refSpp = 2048, seedSpp = 32, mpp = 32, runs = 3, firstRun = 0, writeReferences = 0;
     bool table1 = true;
     int threads = 1;
     int64_t chainLength = 1000;
@@ -348,14 +349,14 @@ struct Summary {
     pf::ChainCounters counters;
 };
 
-// K runs with seeds kRunSeed + k: mean and standard deviation over runs.
+// K runs with seeds kRunSeed + firstRun + k: mean and standard deviation over runs.
 Summary equalTime(const Options &o, const pf::Scene &scene, const std::string &type, const Params &p,
                   const Reference &ref, pf::Bitmap *last) {
     Summary s;
     std::vector<double> errors;
     uint64_t accepted = 0;
     for (int k = 0; k < o.runs; ++k) {
-        Run run = runOnce(o, scene, type, p, kRunSeed + k, ref);
+        Run run = runOnce(o, scene, type, p, kRunSeed + o.firstRun + k, ref);
         errors.push_back(run.error.all);
         s.seconds += run.seconds / o.runs;
         s.trimmed += run.error.trimmed / o.runs;
@@ -511,6 +512,7 @@ int main(int argc, char **argv) {
         {"--res", [&](const char *v) { o.res = std::stoi(v); }},
         {"--time", [&](const char *v) { o.seconds = std::stod(v); }},
         {"--runs", [&](const char *v) { o.runs = std::stoi(v); }},
+        {"--first-run", [&](const char *v) { o.firstRun = std::stoi(v); }},
         {"--ref-spp", [&](const char *v) { o.refSpp = std::stoi(v); }},
         {"--seed-spp", [&](const char *v) { o.seedSpp = std::stoi(v); }},
         {"--mpp", [&](const char *v) { o.mpp = std::stoi(v); }},
@@ -537,6 +539,7 @@ int main(int argc, char **argv) {
             else
                 o.scenes.push_back(argv[i]);
         }
+        if (o.firstRun < 0) throw std::runtime_error("--first-run must not be negative");
         if (o.res < 1 || o.runs < 1 || o.threads < 1 || o.seconds <= 0 || o.seedSpp < 1 || o.chainLength < 1 ||
             o.refSpp < 1)
             throw std::runtime_error(

@@ -60,9 +60,11 @@ int runRender(const RenderArgs &a) {
     image.metadata["pathfarm.renderSeconds"] = std::to_string(stats.seconds);
     image.metadata["pathfarm.sceneLoadSeconds"] = std::to_string(loadSeconds);
     image.metadata["pathfarm.scene"] = a.scene;
-    // The jump size a chain integrator's pilot chose (lambda=auto), as the farm records it too.
+    // What a chain integrator's pilot tuned (lambda, manifoldMediumAngle = "auto"; the angle in degrees), as the
+    // farm records it too.
     for (const pf::ChainCounter &c : stats.counters)
-        if (c.name == "lambda") image.metadata["pathfarm.lambda"] = std::to_string(c.value);
+        if (c.name == "lambda" || c.name == "mediumAngle")
+            image.metadata["pathfarm." + c.name] = std::to_string(c.value);
 
     const std::string out = a.output.empty() ? pf::client::defaultOutput(a.scene) : a.output;
     std::filesystem::path exr(out), png(out);

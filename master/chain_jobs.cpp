@@ -118,7 +118,8 @@ void Master::startChains(JobRuntime &j) {
     v1::ChainStats *stats = j.record.mutable_chain();
     stats->set_phase(v1::CHAIN_PHASE_CHAINS);
     stats->set_luminance(job.normalizer().luminance());
-    stats->set_lambda(job.normalizer().lambda());
+    stats->set_lambda(job.normalizer().tuning().lambda);
+    stats->set_medium_angle(job.normalizer().tuning().mediumAngle);
     stats->set_candidates(job.normalizer().candidates().size());
     spdlog::info("job={}: seeding merged: b = {:.6g} from {} candidates; {} chain and direct tasks", j.record.id(),
                  job.normalizer().luminance(), job.normalizer().candidates().size(),

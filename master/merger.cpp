@@ -12,6 +12,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/math.h"
 #include "farm/block_codec.h"
 #include "farm/chain_codec.h"
 #include "farm/error.h"
@@ -382,6 +383,8 @@ void Master::writeFinalImage(JobRuntime &j, double seconds) {
     image.metadata["pathfarm.job"] = std::to_string(j.record.id());
     image.metadata["pathfarm.tasks"] = std::to_string(f.merged);
     if (j.record.chain().lambda() > 0) image.metadata["pathfarm.lambda"] = std::to_string(j.record.chain().lambda());
+    if (j.record.chain().medium_angle() > 0)
+        image.metadata["pathfarm.mediumAngle"] = std::to_string(j.record.chain().medium_angle() * 180 / kPi);
     if (spec.budget().has_time_seconds())
         image.metadata["pathfarm.timeBudget"] = std::to_string(spec.budget().time_seconds());
     writeEXR((fs::path(jobDir(j.record.id())) / "image.exr").string(), image);

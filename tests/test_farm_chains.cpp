@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cmath>
+#include <filesystem>
+
 #include "farm/harness.h"
 #include "image/bitmap.h"
 
@@ -205,6 +208,35 @@ TEST_F(FarmChains, TimedBurstJobEqualsItsPassesEmbeddedAfterAWorkerDies) {
     ASSERT_EQ(fcode, 0) << fetched;
     EXPECT_TRUE(sameBits(farm->embeddedRender(scene, args + " --passes " + std::to_string(passes), "passes"), out));
     expectMergedOnce(id, job.tasks().total());
+}
+
+// What the luminance pilot tunes (lambda and manifoldMediumAngle = "auto", integrators/erpt.h) travels from the
+// pilot's seeding result through the master to every chain task: an mept job on the glass egg filled with a
+// forward-scattering medium (scenes/glass-egg, 24 x 24) equals the embedded render bit for bit, and the job
+// record and both images carry the same λ and dtheta.
+TEST_F(FarmChains, PilotTunedLambdaAndMediumAngleReachEveryChainTask) {
+    const std::string dir = farm->dir() + "/scene";
+    std::filesystem::copy(std::string(PATHFARM_SOURCE_DIR) + "/scenes/glass-egg", dir,
+                          std::filesystem::copy_options::recursive);
+    const std::string scene = dir + "/scene.xml";
+    farm->startMaster();
+    farm->startWorker(2);
+    const std::string spec =
+        "--integrator mept --spp 2 --seed 7 -D res=24 -D lightScale=0.5 -P maxDepth=6 -P luminanceSamples=4096 "
+        "-P directSamples=1 -P chainLength=20 -P lambda=auto -P manifoldMediumAngle=auto";
+    std::string out, ref;
+    const v1::Job job = farm->submitMatchingEmbedded(scene, spec, out, ref);
+    ASSERT_EQ(job.state(), v1::JOB_DONE);
+    const double lambda = job.chain().lambda(), angle = job.chain().medium_angle();
+    std::printf("pilot: lambda %.2f, dtheta %.3f degrees\n", lambda, angle * 180 / M_PI);
+    EXPECT_GT(lambda, 0);
+    EXPECT_GT(angle, 0);
+    EXPECT_LT(angle, M_PI / 2);
+    for (const std::string &image : {ref, out}) {
+        const auto metadata = readEXR(image).metadata;
+        EXPECT_EQ(metadata.at("pathfarm.lambda"), std::to_string(lambda)) << image;
+        EXPECT_EQ(metadata.at("pathfarm.mediumAngle"), std::to_string(angle * 180 / M_PI)) << image;
+    }
 }
 
 TEST_F(FarmChains, BadChainBudgetsAreRefusedAtSubmission) {

@@ -27,12 +27,8 @@ TEST_F(FarmPortal, MLTJobWithPortalsMatchesTheEmbeddedRender) {
         "--integrator mlt --spp 16 --seed 7 -D res=24 -P maxDepth=4 -P luminanceSamples=4096 -P directSamples=2 "
         "-P lensSubpathMutation=false -P causticPerturbation=false -P multiChainPerturbation=false "
         "-P portalPerturbation=true";
-    const std::string ref = farm->embeddedRender(scene, spec, "ref");
-    const std::string out = farm->dir() + "/farm.exr";
-    const auto [code, output] = farm->cli("submit " + scene + " " + spec + " --wait -o " + out);
-    ASSERT_EQ(code, 0) << output << farm->master().log();
-    EXPECT_TRUE(sameBits(ref, out));
-    const v1::Job job = farm->waitForJob(jobIdFrom(output), 10s);
+    std::string out, ref;
+    const v1::Job job = farm->submitMatchingEmbedded(scene, spec, out, ref);
     ASSERT_EQ(job.state(), v1::JOB_DONE);
     bool portal = false;
     for (const v1::MutationCount &m : job.chain().mutation_counts())

@@ -76,13 +76,14 @@ TEST(FarmWire, CorruptOrMismatchedBlocksAreRefused) {
 }
 
 // Burst tasks and the luminance pilot on the wire (render/burst.h, render/pilot.h): a task's pass, plan, W
-// and jump size round-trip exactly, and a worker refuses a malformed plan or a bad W or λ with a FarmError
-// (the master refuses a pilot result with a bad λ alike) rather than dividing by zero later.
+// and what the pilot tuned (λ, medium dtheta) round-trip exactly, and a worker refuses a malformed plan or a bad
+// W, λ or dtheta with a FarmError (the master refuses a pilot result with a bad λ or dtheta alike) rather than
+// dividing by zero later.
 TEST(FarmWire, BurstTasksRoundTripAndMalformedOnesAreRefused) {
     pf::ChainTask task;
     task.index = 17;
     task.mutations = 100;
-    task.lambda = 8.5;
+    task.tuning = {8.5, 0.03125};
     pf::BurstPlan plan;
     plan.interleave = 7;
     plan.blocks = 3;
@@ -91,7 +92,7 @@ TEST(FarmWire, BurstTasksRoundTripAndMalformedOnesAreRefused) {
     const pf::ChainTask back = pf::farm::fromProto(pf::farm::toProto(task));
     ASSERT_TRUE(back.burst.has_value());
     EXPECT_EQ(back.index, 17u);
-    EXPECT_EQ(back.lambda, 8.5);
+    EXPECT_EQ(back.tuning, task.tuning);
     EXPECT_EQ(back.burst->pass, 11u);
     EXPECT_EQ(back.burst->block, 2u);
     EXPECT_EQ(back.burst->meanLuminance, 0.25);
@@ -112,11 +113,14 @@ TEST(FarmWire, BurstTasksRoundTripAndMalformedOnesAreRefused) {
     refused([](auto &w) { w.mutable_burst()->set_mean_luminance(-1); });
     refused([](auto &w) { w.mutable_burst()->set_mean_luminance(INFINITY); });
     refused([](auto &w) { w.set_lambda(-2); });
+    refused([](auto &w) { w.set_medium_angle(-0.5); });
+    refused([](auto &w) { w.set_medium_angle(4); });  // beyond pi
+    refused([](auto &w) { w.set_medium_angle(std::nan("")); });
 
     pf::SeedingResult pilot;
     pilot.depthLuminance = {0.5, 0.25};
     pilot.samples = 15000;
-    pilot.lambda = 9.25;
+    pilot.tuning = {9.25, 0.0625};
     const pf::SeedingTask pilotTask{0, 0, 15000};
     const pf::SeedingTask wireTask = pf::farm::fromProto([&] {
         pathfarm::v1::SeedingTask t;
@@ -128,10 +132,13 @@ TEST(FarmWire, BurstTasksRoundTripAndMalformedOnesAreRefused) {
     const pf::Film &film = scene->sensor().film();
     const pf::SeedingResult decoded =
         pf::farm::decodeSeedingResult(pf::farm::encodeSeedingResult(pilot), film, wireTask);
-    EXPECT_EQ(decoded.lambda, 9.25);
+    EXPECT_EQ(decoded.tuning, pilot.tuning);
     EXPECT_EQ(decoded.depthLuminance, pilot.depthLuminance);
-    pilot.lambda = std::nan("");
-    EXPECT_THROW(pf::farm::decodeSeedingResult(pf::farm::encodeSeedingResult(pilot), film, wireTask), FarmError);
+    for (const pf::ManifoldTuning bad :
+         {pf::ManifoldTuning{std::nan(""), 0}, pf::ManifoldTuning{1, -1}, pf::ManifoldTuning{1, INFINITY}}) {
+        pilot.tuning = bad;
+        EXPECT_THROW(pf::farm::decodeSeedingResult(pf::farm::encodeSeedingResult(pilot), film, wireTask), FarmError);
+    }
 }
 
 TEST(FarmWire, SceneFilesAreCollectedThroughIncludesAndDefines) {

@@ -9,6 +9,7 @@
 #include "integrators/medium_angle_pilot.h"
 #include "mcmc/metropolis.h"
 #include "path/manifold_perturbation.h"
+#include "render/normalizer.h"
 #include "render/pilot.h"
 #include "test_mlt_common.h"
 #include "test_path_helpers.h"
@@ -89,7 +90,50 @@ TEST(MediumAnglePilot, DetailedBalanceAtThePilotsAngle) {
     EXPECT_GE(mediumChains, 10) << "medium vertices should join chains at the pilot's dtheta";
 }
 
-// manifoldMediumAngle: in degrees, by default manifoldGlossyAngle's value; outside [0, 180) an error naming it.
+// manifoldMediumAngle = "auto": mept's luminance pilot measures dtheta on its own paths (the value pilotMediumAngle
+// gives on that pool at the chains' λ), deterministically for a job seed; the normalizer hands it to every chain
+// task, and the chains report it in degrees with their statistics. With lambda = "auto" too, dtheta is measured
+// at the tuned λ.
+TEST(MediumAnglePilot, AutoIsMeasuredByThePilotAndReachesTheChainTasks) {
+    auto scene = loadMLTTestScene("glass-egg-largelight", 16, 4);
+    const auto make = [&](const std::string &lambda) {
+        return makeTestIntegrator(
+            *scene, "mept",
+            {{"manifoldMediumAngle", "auto"}, {"lambda", lambda}, {"luminanceSamples", "4096"}, {"chainLength", "20"}});
+    };
+    const auto integrator = make("10");
+    const auto &mept = dynamic_cast<const ERPT &>(*integrator);
+    ASSERT_TRUE(mept.mediumAngleAuto());
+    const SeedingTask pilotTask = mept.seedingTasks(*scene).at(0);
+    const SeedingResult pilot = mept.runSeeding(*scene, 1, kJobSeed, pilotTask);
+    EXPECT_TRUE(pilot.candidates.empty()) << "the pilot ships sums and what it tuned only";
+    EXPECT_EQ(pilot.tuning.lambda, 0) << "lambda was set by hand";
+    EXPECT_EQ(pilot.tuning.mediumAngle, pilotOn(*scene, "10").angle);
+    EXPECT_NE(pilot.tuning.mediumAngle, mept.mediumAngle()) << "the egg's medium vertices should have been measured";
+    EXPECT_EQ(mept.runSeeding(*scene, 1, kJobSeed, pilotTask).tuning, pilot.tuning) << "the same seed, another dtheta";
+
+    const Normalizer normalizer({pilot});
+    EXPECT_EQ(normalizer.tuning(), pilot.tuning);
+    EXPECT_EQ(mept.chainTask(*scene, normalizer, kJobSeed, 1, 0).tuning, pilot.tuning);
+    ChainStatistics stats = chainStatistics(*scene, mept, 1);  // seeded with 3
+    EXPECT_EQ(counter(stats.counters, "mediumAngle").value,
+              mept.runSeeding(*scene, 1, 3, pilotTask).tuning.mediumAngle * 180 / kPi);
+
+    // Both tuned: dtheta is measured at the tuned λ, not at the integrator's 50.
+    const auto both = make("auto");
+    const auto &tuned = dynamic_cast<const ERPT &>(*both);
+    const SeedingResult bothPilot = tuned.runSeeding(*scene, 1, kJobSeed, pilotTask);
+    ASSERT_GT(bothPilot.tuning.lambda, 0);
+    const SeedingResult pool = runPilot(*scene, tuned.seeding(*scene), kJobSeed, 4096, true);
+    EXPECT_EQ(bothPilot.tuning.mediumAngle,
+              pilotMediumAngle(*scene, tuned, pilotSeed(kJobSeed), pool.candidates, bothPilot.tuning.lambda).angle);
+    std::printf("pilot dtheta %.3f deg at lambda 10; %.3f deg at the tuned lambda %.1f\n",
+                pilot.tuning.mediumAngle * 180 / kPi, bothPilot.tuning.mediumAngle * 180 / kPi,
+                bothPilot.tuning.lambda);
+}
+
+// manifoldMediumAngle: in degrees, by default manifoldGlossyAngle's value; outside [0, 180) an error naming it;
+// "auto" for mept only (memlt has no luminance pilot to measure it on).
 TEST(MediumAnglePilot, AngleParameter) {
     auto scene = loadMLTTestScene("glass-egg-largelight", 8, 4);
     for (const std::string type : {"mept", "memlt"}) {
@@ -112,6 +156,8 @@ TEST(MediumAnglePilot, AngleParameter) {
         };
         EXPECT_NE(error("-1").find("manifoldMediumAngle"), std::string::npos) << type;
         EXPECT_NE(error("180").find("manifoldMediumAngle"), std::string::npos) << type;
+        EXPECT_NE(error("automatic").find("manifoldMediumAngle"), std::string::npos) << type;
+        EXPECT_EQ(error("auto").empty(), type == "mept") << type << ": " << error("auto");
     }
 }
 

@@ -97,22 +97,22 @@ TEST(AutoLambda, DeterministicNearTheTargetAndUnbiased) {
         const auto integrator = makeTestIntegrator(*scene, "mept", params);
         const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
         const SeedingTask pilot = chains.seedingTasks(*scene).at(0);
-        const double lambda = chains.runSeeding(*scene, 8, 11, pilot).lambda;
-        EXPECT_EQ(chains.runSeeding(*scene, 8, 11, pilot).lambda, lambda) << "the same seed, another λ";
-        EXPECT_NE(chains.runSeeding(*scene, 8, 12, pilot).lambda, lambda) << "λ ignores the seed";
+        const double lambda = chains.runSeeding(*scene, 8, 11, pilot).tuning.lambda;
+        EXPECT_EQ(chains.runSeeding(*scene, 8, 11, pilot).tuning.lambda, lambda) << "the same seed, another λ";
+        EXPECT_NE(chains.runSeeding(*scene, 8, 12, pilot).tuning.lambda, lambda) << "λ ignores the seed";
         ASSERT_GT(lambda, 1);
         ASSERT_LT(lambda, 1e5);
         const Normalizer normalizer = seedChains(*scene, chains, 11);
-        EXPECT_EQ(normalizer.lambda(), lambda);
+        EXPECT_EQ(normalizer.tuning().lambda, lambda);
         const ChainTask task = chains.chainTask(*scene, normalizer, 11, 8, 0);
-        EXPECT_EQ(task.lambda, lambda);
+        EXPECT_EQ(task.tuning.lambda, lambda);
         // A render's chains (chainStatistics seeds with 3) accept near the target.
         auto [counts, counters] = chainStatistics(*scene, *integrator, 8);
         const double acceptance = static_cast<double>(counts[0].accepted) / static_cast<double>(counts[0].proposed);
         std::printf("%s mept lambda=auto: lambda %.1f, acceptance %.1f%% (target %.0f%%)\n", name.c_str(), lambda,
                     100 * acceptance, 100 * kLambdaTargetAcceptance);
         EXPECT_NEAR(acceptance, kLambdaTargetAcceptance, 0.12);
-        EXPECT_EQ(counter(counters, "lambda").value, chains.runSeeding(*scene, 8, 3, pilot).lambda);  // its seed
+        EXPECT_EQ(counter(counters, "lambda").value, chains.runSeeding(*scene, 8, 3, pilot).tuning.lambda);  // its seed
         ConvergenceSetup s;
         s.budget = 8;
         s.maxDepth = maxDepth;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "integrators/lambda_tuning.h"
+#include "integrators/medium_angle_pilot.h"
 #include "render/normalizer.h"
 #include "render/pilot.h"
 #include "scene/scene.h"
@@ -49,10 +50,15 @@ BurstPlan ERPT::plan(const Scene &scene, int64_t spp) const {
 }
 
 SeedingResult ERPT::runSeeding(const Scene &scene, int64_t, uint64_t seed, const SeedingTask &task) const {
-    if (!lambdaAuto()) return runPilot(scene, seeding(scene), seed, task.pilotSamples);
+    if (!lambdaAuto() && !mediumAngleAuto()) return runPilot(scene, seeding(scene), seed, task.pilotSamples);
     SeedingResult pilot = runPilot(scene, seeding(scene), seed, task.pilotSamples, true);
-    pilot.lambda = tuneLambda(scene, *this, pilotSeed(seed), pilot.candidates);
-    pilot.candidates.clear();  // the pilot ships luminance sums and λ only
+    if (lambdaAuto()) pilot.tuning.lambda = tuneLambda(scene, *this, pilotSeed(seed), pilot.candidates);
+    // dtheta is measured at the jump size the chains will use: how far a perturbation turns a medium vertex
+    // depends on it (medium_angle_pilot.h).
+    if (mediumAngleAuto())
+        pilot.tuning.mediumAngle =
+            pilotMediumAngle(scene, *this, pilotSeed(seed), pilot.candidates, pilot.tuning.lambda).angle;
+    pilot.candidates.clear();  // the pilot ships luminance sums and what it tuned only
     return pilot;
 }
 
@@ -72,7 +78,7 @@ ChainTask ERPT::chainTask(const Scene &scene, const Normalizer &normalizer, uint
     task.index = index;
     task.mutations = static_cast<uint64_t>(chainLength_);
     task.depthLuminance = normalizer.depthLuminance();
-    task.lambda = normalizer.lambda();
+    task.tuning = normalizer.tuning();
     task.burst =
         BurstPass{index / p.blocks, index % p.blocks, normalizer.luminance() / static_cast<double>(p.pixels), p};
     return task;

@@ -50,7 +50,8 @@ public:
     ChainKind chainKind() const override { return ChainKind::Burst; }
     // The seeding BDPT of the pilot and of every burst task (one sample per covered pixel and pass).
     SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
-    // The luminance pilot alone; with lambda = "auto" it also tunes λ on its paths (lambda_tuning.h).
+    // The luminance pilot alone; with lambda = "auto" it also tunes λ on its paths (lambda_tuning.h), with
+    // manifoldMediumAngle = "auto" it measures dtheta of medium vertices there (medium_angle_pilot.h).
     std::vector<SeedingTask> seedingTasks(const Scene &scene) const override;
     SeedingResult runSeeding(const Scene &scene, int64_t spp, uint64_t seed, const SeedingTask &task) const override;
     // `spp` rounds of the plan's passes (0: a time budget, unbounded).

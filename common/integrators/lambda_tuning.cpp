@@ -31,7 +31,7 @@ double tuneLambda(const Scene &scene, const PathSpaceIntegrator &integrator, uin
     std::vector<double> history;  // log λ after each update
     for (MutablePath path : starts) {
         for (int b = 0; b < kBatches && path.length() > 0; ++b) {
-            const MutationSet set = integrator.mutations(scene, std::exp(logLambda));
+            const MutationSet set = integrator.mutations(scene, {std::exp(logLambda), 0});
             PathChain chain(scene, set, integrator.minVertices(), integrator.maxVertices(), nowhere, 0.0);
             if (!(chain.start(path) > 0)) break;
             MutationCounts counts = integrator.mutationTypes();

@@ -27,12 +27,12 @@ double scatteringAngle(const PathView &x, int i) {
 }  // namespace
 
 MediumAnglePilot pilotMediumAngle(const Scene &scene, const PathSpaceIntegrator &integrator, uint64_t pilotSeed,
-                                  const std::vector<SeedCandidate> &pool) {
+                                  const std::vector<SeedCandidate> &pool, double lambda) {
     MediumAnglePilot result{integrator.mediumAngle(), 0};
     if (!integrator.usesManifoldPerturbation()) return result;
     const std::vector<MutablePath> starts = pilotChainStarts(scene, integrator, pilotSeed, pool, kAngleStream, kChains);
     const std::string manifold = mutationName(MutationType::Manifold);
-    const MutationSet set = integrator.mutations(scene);
+    const MutationSet set = integrator.mutations(scene, {lambda, 0});
     ImageBlock nowhere(0, 0, 1, 1, nullptr);  // the chains' deposits are not wanted
     PCG32 rng(pilotSeed, kAngleStream);
     std::vector<double> changes;

@@ -26,9 +26,10 @@ struct MediumAnglePilot {
     uint64_t changes = 0;  // medium vertices whose scattering angle a perturbation changed (the median's sample)
 };
 
-// dtheta measured on `pool` (records that regenerate with `pilotSeed`); the integrator's own when the pool
-// carries no energy, the integrator has no manifold perturbation, or no medium vertex changed.
+// dtheta measured on `pool` (records that regenerate with `pilotSeed`) with the jump size `lambda` (0: the
+// integrator's); the integrator's own dtheta when the pool carries no energy, the integrator has no manifold
+// perturbation, or no medium vertex changed.
 MediumAnglePilot pilotMediumAngle(const Scene &scene, const PathSpaceIntegrator &integrator, uint64_t pilotSeed,
-                                  const std::vector<SeedCandidate> &pool);
+                                  const std::vector<SeedCandidate> &pool, double lambda = 0);
 
 }  // namespace pf

@@ -62,7 +62,13 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     const double glossyAngle = props.getFloat("manifoldGlossyAngle", 1.0);
     if (!(glossyAngle >= 0 && glossyAngle < 180)) props.fail("manifoldGlossyAngle", "must lie in [0, 180) degrees");
     glossyAngle_ = glossyAngle * kPi / 180;
-    const double mediumAngle = props.getFloat("manifoldMediumAngle", glossyAngle);
+    // "auto": measured by the luminance pilot of erpt and mept; until then (and where it measures nothing) the
+    // surfaces' angle.
+    mediumAngleAuto_ =
+        props.has("manifoldMediumAngle") && props.type("manifoldMediumAngle") == Properties::Type::String;
+    if (mediumAngleAuto_ && props.getString("manifoldMediumAngle") != "auto")
+        props.fail("manifoldMediumAngle", "must be an angle in degrees or \"auto\"");
+    const double mediumAngle = mediumAngleAuto_ ? glossyAngle : props.getFloat("manifoldMediumAngle", glossyAngle);
     if (!(mediumAngle >= 0 && mediumAngle < 180)) props.fail("manifoldMediumAngle", "must lie in [0, 180) degrees");
     mediumAngle_ = mediumAngle * kPi / 180;
     mediumChains_ = props.getBool("mediumChains", true);
@@ -89,7 +95,7 @@ bool PathSpaceIntegrator::usesManifoldPerturbation() const {
     return std::find(types_.begin(), types_.end(), MutationType::Manifold) != types_.end();
 }
 
-MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) const {
+MutationSet PathSpaceIntegrator::mutations(const Scene &scene, const ManifoldTuning &tuned) const {
     const PerturbationScale scale(scene);
     MutationSet set;
     // With portals, the portal perturbation's paper (Otsu et al., §5) gives the global mutation the
@@ -114,8 +120,9 @@ MutationSet PathSpaceIntegrator::mutations(const Scene &scene, double lambda) co
                 set.add(std::make_unique<MultiChainPerturbation>(scale));
                 break;
             case MutationType::Manifold:
-                set.add(std::make_unique<ManifoldPerturbation>(scene, lambda > 0 ? lambda : lambda_, glossyAngle_,
-                                                               mediumChains_, mediumAngle_));
+                set.add(std::make_unique<ManifoldPerturbation>(
+                    scene, tuned.lambda > 0 ? tuned.lambda : lambda_, glossyAngle_, mediumChains_,
+                    tuned.mediumAngle > 0 ? tuned.mediumAngle : mediumAngle_));
                 break;
             case MutationType::MediumDistance:
                 set.add(std::make_unique<MediumDistancePerturbation>());
@@ -133,15 +140,17 @@ void PathSpaceIntegrator::runChain(const Scene &scene, uint64_t jobSeed, const C
     // The chain starts on the resampled candidate itself (ALGORITHMS.md §2.4), regenerated from its record.
     MutablePath start;
     bdpt_->regenerate(scene, jobSeed, seed.record, [&](const StrategySample &x) { start = MutablePath(*x.path); });
-    const MutationSet set = mutations(scene, task.lambda);
+    const MutationSet set = mutations(scene, task.tuning);
     PathChain chain(scene, set, minVertices(), maxVertices(), film, scale,
                     task.firstStage.enabled() ? &task.firstStage : nullptr);
     // A candidate carries energy, so its path does; pi = 0 could only come from round-off in re-evaluating
     // a Dirac vertex from the other side, and such a start is left out rather than divided by.
     if (start.length() > 0 && chain.start(start) > 0) runMetropolis(chain, task.mutations, rng, nullptr, counts);
     for (size_t k = 0; k < set.size(); ++k) set[k].addCounters(counters);
-    // A tuned jump size is reported with the chains' statistics (and in the image's metadata).
-    if (task.lambda > 0) addCounters(counters, {{"lambda", task.lambda, ChainCounter::Merge::Max}});
+    // What the pilot tuned is reported with the chains' statistics (and in the image's metadata), dtheta in degrees.
+    if (task.tuning.lambda > 0) addCounters(counters, {{"lambda", task.tuning.lambda, ChainCounter::Merge::Max}});
+    if (task.tuning.mediumAngle > 0)
+        addCounters(counters, {{"mediumAngle", task.tuning.mediumAngle * 180 / kPi, ChainCounter::Merge::Max}});
 }
 
 namespace {
@@ -161,6 +170,8 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
     luminanceSamples_ = props.getInt("luminanceSamples", 100000);
     if (luminanceSamples_ < 1) props.fail("luminanceSamples", "must be at least 1");
     if (lambdaAuto()) props.fail("lambda", "\"auto\" is for erpt and mept (their luminance pilot tunes it)");
+    if (mediumAngleAuto())
+        props.fail("manifoldMediumAngle", "\"auto\" is for erpt and mept (their luminance pilot measures it)");
     firstStageReduction_ = readTwoStage(props);
 }
 

@@ -22,9 +22,9 @@
 //                                  value); 0 leaves every glossy vertex non-specular
 //   mediumChains (true)            whether medium vertices may join the manifold perturbation's chains (§6.7),
 //                                  classified with manifoldMediumAngle against their phase function's median
-//   manifoldMediumAngle (= manifoldGlossyAngle)  dtheta of medium vertices, in degrees (the mean turn of a
-//                                  scattering angle per perturbation; integrators/medium_angle_pilot.h
-//                                  measures it)
+//   manifoldMediumAngle (= manifoldGlossyAngle)  dtheta of medium vertices, in degrees (the typical turn of
+//                                  a scattering angle per perturbation); erpt and mept also take "auto": their
+//                                  luminance pilot measures it (integrators/medium_angle_pilot.h)
 //   mediumDistancePerturbation (= manifoldPerturbation)  the medium-distance perturbation
 //   twoStage (false)               two-stage MLT (render/two_stage.h): a first stage's low-resolution image
 //                                  I steers the chains, whose target becomes L / I
@@ -61,11 +61,13 @@ public:
     int64_t directSamples() const override { return directSamples_; }
 
     // The enabled mutations, in mutationTypes() order, with their step sizes for `scene`; the manifold
-    // perturbation's jump size `lambda` (0: the integrator's).
-    MutationSet mutations(const Scene &scene, double lambda = 0) const;
+    // perturbation's jump size and medium dtheta as `tuned` (fields of 0: the integrator's).
+    MutationSet mutations(const Scene &scene, const ManifoldTuning &tuned = {}) const;
     // lambda = "auto": the jump size is tuned by the luminance pilot (integrators/erpt.h).
     bool lambdaAuto() const { return lambdaAuto_; }
     double lambda() const { return lambda_; }
+    // manifoldMediumAngle = "auto": the luminance pilot measures dtheta of medium vertices (erpt.h).
+    bool mediumAngleAuto() const { return mediumAngleAuto_; }
     // dtheta of medium vertices in the manifold perturbation's classification, in radians.
     double mediumAngle() const { return mediumAngle_; }
     bool usesManifoldPerturbation() const;
@@ -88,7 +90,7 @@ private:
     double lambda_ = 50, glossyAngle_ = 0, mediumAngle_ = 0;
     bool mediumChains_ = true;
     double portalR1_ = 0, portalR2_ = 0;
-    bool lambdaAuto_ = false;
+    bool lambdaAuto_ = false, mediumAngleAuto_ = false;
     std::vector<MutationType> types_;
 };
 

@@ -38,8 +38,8 @@ struct ChainTask {
     std::vector<double> depthLuminance;
     // Bursts: the pass and block whose seeds the task samples itself (render/burst.h); `seeds` is empty.
     std::optional<BurstPass> burst;
-    // The manifold perturbation's jump size as the pilot tuned it (lambda=auto); 0: the integrator's.
-    double lambda = 0;
+    // The manifold perturbation's jump size and medium dtheta as the pilot tuned them; 0: the integrator's.
+    ManifoldTuning tuning;
     // Two-stage MLT: the first stage's image; the chains' target is L / I (render/two_stage.h).
     FirstStageImage firstStage;
 };

@@ -16,7 +16,8 @@ Normalizer::Normalizer(std::vector<SeedingResult> results) {
         pool_.insert(pool_.end(), r.candidates.begin(), r.candidates.end());
         if (depthLuminance_.size() < r.depthLuminance.size()) depthLuminance_.resize(r.depthLuminance.size(), 0.0);
         for (size_t d = 0; d < r.depthLuminance.size(); ++d) depthLuminance_[d] += r.depthLuminance[d];
-        if (r.lambda > 0) lambda_ = r.lambda;
+        if (r.tuning.lambda > 0) tuning_.lambda = r.tuning.lambda;
+        if (r.tuning.mediumAngle > 0) tuning_.mediumAngle = r.tuning.mediumAngle;
         if (!r.firstStage.enabled()) continue;
         if (!firstStage_.enabled())
             firstStage_ = r.firstStage;

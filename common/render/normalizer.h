@@ -29,8 +29,8 @@ public:
     double luminance() const { return luminance_; }
     const std::vector<double> &depthLuminance() const { return depthLuminance_; }
     const std::vector<SeedCandidate> &candidates() const { return pool_; }
-    // The jump size a seeding result tuned (lambda=auto), 0 if none did.
-    double lambda() const { return lambda_; }
+    // What a seeding result tuned (lambda or manifoldMediumAngle = "auto"); zeros where none did.
+    const ManifoldTuning &tuning() const { return tuning_; }
     // Two-stage MLT: the first stage's image I that the chains' target is divided by (render/two_stage.h);
     // the candidates' weights, b̂ and the luminance per depth are then those of that target.
     const FirstStageImage &firstStage() const { return firstStage_; }
@@ -48,7 +48,7 @@ private:
     std::vector<double> cumulative_;  // cumulative_[i] = sum of the weights before candidate i (size + 1)
     std::vector<double> depthLuminance_;
     double luminance_ = 0;
-    double lambda_ = 0;
+    ManifoldTuning tuning_;
     FirstStageImage firstStage_;
 };
 

@@ -16,6 +16,7 @@
 
 #include "image/film.h"
 #include "integrators/bdpt.h"
+#include "render/manifold_tuning.h"
 #include "render/two_stage.h"
 
 namespace pf {
@@ -56,7 +57,7 @@ struct SeedingResult {
     // Sum of the candidates' weights per s + t - 1 (MMLT's chains keep s + t; crossings do not change it).
     std::vector<double> depthLuminance;
     uint64_t samples = 0;        // BDPT samples taken
-    double lambda = 0;           // the luminance pilot's tuned jump size of the manifold perturbation (0: none)
+    ManifoldTuning tuning;       // what the luminance pilot tuned (lambda or manifoldMediumAngle = "auto")
     FirstStageImage firstStage;  // two-stage MLT: the first stage's sums (render/two_stage.h)
     uint64_t rays = 0;
     double seconds = 0;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/math.h"
 #include "farm/block_codec.h"
 #include "farm/error.h"
 
@@ -109,6 +110,15 @@ void readChainOutput(const v1::ChainOutput &in, Figures &r) {
     r.seedSamples = in.seed_samples();
 }
 
+// What the pilot tuned, as a task or a seeding result carries it (0: none): λ finite and not negative,
+// dtheta an angle in [0, pi).
+ManifoldTuning decodeTuning(double lambda, double mediumAngle, const char *what) {
+    if (!std::isfinite(lambda) || lambda < 0) throw FarmError(std::string(what) + ": a bad jump size lambda");
+    if (!(mediumAngle >= 0 && mediumAngle < kPi))
+        throw FarmError(std::string(what) + ": a bad medium angle (dtheta) outside [0, pi)");
+    return {lambda, mediumAngle};
+}
+
 }  // namespace
 
 v1::ChainTask toProto(const ChainTask &task) {
@@ -116,7 +126,8 @@ v1::ChainTask toProto(const ChainTask &task) {
     out.set_index(task.index);
     for (const ChainSeed &s : task.seeds) addRecord(*out.mutable_seeds(), s.record, s.weight);
     out.set_mutations(task.mutations);
-    out.set_lambda(task.lambda);
+    out.set_lambda(task.tuning.lambda);
+    out.set_medium_angle(task.tuning.mediumAngle);
     for (const double l : task.depthLuminance) out.add_depth_luminance(l);
     if (task.firstStage.enabled()) encodeFirstStage(task.firstStage, *out.mutable_first_stage());
     if (task.burst) {
@@ -139,8 +150,7 @@ ChainTask fromProto(const v1::ChainTask &task) {
     });
     out.mutations = task.mutations();
     out.depthLuminance = finiteValues(task.depth_luminance(), "chain task");
-    if (!std::isfinite(task.lambda()) || task.lambda() < 0) throw FarmError("chain task: a bad jump size lambda");
-    out.lambda = task.lambda();
+    out.tuning = decodeTuning(task.lambda(), task.medium_angle(), "chain task");
     out.firstStage = decodeFirstStage(task.first_stage(), "chain task");
     // The chains divide by it: every cell must be positive (the normalizer floors them).
     for (const double l : out.firstStage.luminance)
@@ -180,7 +190,8 @@ std::string encodeSeedingResult(const SeedingResult &result) {
     for (const double l : result.depthLuminance) out.add_depth_luminance(l);
     if (result.firstStage.enabled()) encodeFirstStage(result.firstStage, *out.mutable_first_stage());
     out.set_samples(result.samples);
-    out.set_lambda(result.lambda);
+    out.set_lambda(result.tuning.lambda);
+    out.set_medium_angle(result.tuning.mediumAngle);
     out.set_rays(result.rays);
     out.set_seconds(result.seconds);
     return out.SerializeAsString();
@@ -217,8 +228,7 @@ SeedingResult decodeSeedingResult(std::string_view payload, const Film &film, co
         out.candidates.push_back({r, weight, cells > 0 ? in.candidates().cell(static_cast<int>(i)) : 0u});
     });
     out.depthLuminance = finiteValues(in.depth_luminance(), "seeding result");
-    if (!std::isfinite(in.lambda()) || in.lambda() < 0) throw FarmError("seeding result: a bad jump size lambda");
-    out.lambda = in.lambda();
+    out.tuning = decodeTuning(in.lambda(), in.medium_angle(), "seeding result");
     out.samples = in.samples();
     out.rays = in.rays();
     out.seconds = in.seconds();

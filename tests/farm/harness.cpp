@@ -151,6 +151,19 @@ std::string Farm::embeddedRender(const std::string &scene, const std::string &ar
     return out;
 }
 
+pathfarm::v1::Job Farm::submitMatchingEmbedded(const std::string &scene, const std::string &args,
+                                               std::string &farmImage, std::string &embeddedImage) const {
+    embeddedImage = embeddedRender(scene, args, "embedded");
+    farmImage = dir_ + "/farm.exr";
+    const auto [code, output] = cli("submit " + scene + " " + args + " --wait -o " + farmImage);
+    EXPECT_EQ(code, 0) << output << master_->log();
+    if (code != 0) return {};
+    EXPECT_TRUE(sameBits(embeddedImage, farmImage));
+    pathfarm::v1::Job job = waitForJob(jobIdFrom(output), std::chrono::seconds(10));
+    EXPECT_EQ(job.state(), pathfarm::v1::JOB_DONE);
+    return job;
+}
+
 Farm::Farm(const std::string &name) : dir_(tempDir("farm-" + name)), port_(freePort()), masterData_(dir_ + "/data") {
     std::random_device rd;
     auto token = [&] {

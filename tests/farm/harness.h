@@ -100,6 +100,11 @@ public:
     std::string embeddedRender(const std::string &scene, const std::string &args, const std::string &name) const;
     // Waits until the job is done (or failed/cancelled) and returns it; fails the test on timeout.
     pathfarm::v1::Job waitForJob(int64_t id, std::chrono::seconds timeout) const;
+    // `pathfarm submit SCENE ARGS --wait` on the running farm, whose image must equal the embedded render of the
+    // same ARGS bit for bit (the test fails otherwise, and if the job does not end done); returns the job's
+    // record, its image in `farmImage` and the embedded one's in `embeddedImage` (both in this farm's directory).
+    pathfarm::v1::Job submitMatchingEmbedded(const std::string &scene, const std::string &args, std::string &farmImage,
+                                             std::string &embeddedImage) const;
 
     // One SQL query on the master's store, returning the first column of the first row.
     int64_t queryStore(const std::string &sql) const;
