@@ -418,7 +418,7 @@ void chainResults(const std::string &scene, const std::string &name, const NameV
     std::printf("%s, %s at %dx%d: chain task results, tiles (now) and dense (before)\n", scene.c_str(), name.c_str(),
                 film.cropWidth(), film.cropHeight());
     std::printf(
-        "task  mutations  task s  tiles  film MB tiles/dense  wire KB tiles/dense  encode ms tiles/dense  "
+        "task  mutations  task s  tiles (of all)  film MB tiles/dense  wire KB tiles/dense  encode ms tiles/dense  "
         "decode+merge ms tiles/dense\n");
     ChainImage now(makeFilmBlock(*loaded)), before(makeFilmBlock(*loaded));
     double sums[8] = {};
@@ -444,13 +444,13 @@ void chainResults(const std::string &scene, const std::string &name, const NameV
         row[7] = msSince(t0);
         size_t present = 0;
         for (size_t t = 0; t < r.film.tiles()->tileCount(); ++t) present += !r.film.tiles()->tile(t).empty();
-        std::printf("%4zu %10llu %7.2f %3zu/%zu  %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n", i,
+        std::printf("%4zu %10llu %7.2f %5zu/%zu  %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n", i,
                     static_cast<unsigned long long>(r.mutations), r.seconds, present, r.film.tiles()->tileCount(),
                     row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7]);
         for (int k = 0; k < 8; ++k) sums[k] += row[k];
     }
     const double n = static_cast<double>(results.size());
-    std::printf("mean                                %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n",
+    std::printf("mean                                   %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n",
                 sums[0] / n, sums[1] / n, sums[2] / n, sums[3] / n, sums[4] / n, sums[5] / n, sums[6] / n, sums[7] / n);
     const auto bits = [](std::span<const double> a, std::span<const double> b) {
         return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;

@@ -552,7 +552,7 @@ TEST(ImageBlock, MergedTilesEqualOneBlock) {
 
 // A chain task's film (BlockStorage::Tiles) holds exactly the splat sums of a dense block that received the
 // same splats, bit for bit, and merging it adds exactly what merging that dense block adds: filters whose
-// footprint crosses tiles (Lanczos with 16 lobes spans 33 pixels, 2 or 3 tiles) and negative lobes, no
+// footprint crosses tiles (Lanczos with 16 lobes spans 33 pixels, 5 or 6 tiles) and negative lobes, no
 // filter, an offset block, splats beyond the border and invalid ones, clustered so that most tiles stay
 // unallocated.
 TEST(ImageBlock, TilesHoldTheDenseSplatsBitForBit) {
