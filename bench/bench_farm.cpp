@@ -3,6 +3,7 @@
 //
 //   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
 //              [--fake-batch N|auto[,...]] [--task-seconds S]
+//   bench_farm [SCENE] --chain NAME [--chain-tasks K] [-P name=value ...]
 //   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res,
 //   batches of 1)
 //
@@ -24,6 +25,13 @@
 //    leaves the size to the master, as pathfarm-worker does by default); a list of sizes runs part 4 once
 //    per size, each with a fresh master. --task-seconds S: also the 8-core
 //    workers one master keeps busy at tasks of S seconds (e.g. part 1's smallest task, under --fake-only).
+// 5. --chain NAME [--chain-tasks K] [-P name=value ...] (instead of 1-4): what a chain task's result costs, at
+//    the scene's own resolution, with its film as tiles (now, image/splat_tiles.h) and as the dense block of
+//    the whole crop window that chain tasks returned before (the same deposits merged into one): the film's
+//    memory, bytes on the wire, the worker's encode time and the master's decode + merge time per result,
+//    through the real codec and merge (decodeChainResult into a fresh block, mergeChainResult into the
+//    job's chains). The tasks are the first K (default 8, a pass of erpt/mept) of a time-budgeted render of
+//    integrator NAME with job seed 1, run on 2 threads; both merged films must come out bitwise equal.
 #include <unistd.h>
 
 #include <atomic>
@@ -33,16 +41,19 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <thread>
 
 #include "farm/block_codec.h"
+#include "farm/chain_codec.h"
 #include "farm/harness.h"
 #include "farm/hash.h"
 #include "farm/job_setup.h"
 #include "farm/rpc.h"
 #include "image/bitmap.h"
+#include "render/chain_job.h"
 #include "render/image_task.h"
 #include "scene/scene.h"
 
@@ -379,6 +390,78 @@ double realFarm(const std::string &scene, int res, int spp) {
     return taskSeconds8 / (samples / static_cast<double>(tasks));
 }
 
+double msSince(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Part 5.
+void chainResults(const std::string &scene, const std::string &name, const NameValues &params, int count) {
+    auto loaded = loadScene(scene);
+    const auto integrator = makeIntegrator(*loaded, name, params);
+    const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
+    ChainJob job(*loaded, chains, 1, 0);
+    for (uint64_t t = 0; t < job.seedingTaskCount(); ++t)
+        job.mergeSeeding(chains.runSeeding(*loaded, 0, 1, job.seedingTask(t)));
+    std::vector<ChainTask> tasks;
+    for (uint64_t t = job.firstChainTask(); static_cast<int>(tasks.size()) < count; ++t)
+        if (job.phaseOf(t) == ChainJob::Phase::Chain) tasks.push_back(job.chainTask(t));
+    std::vector<std::optional<ChainResult>> results(tasks.size());
+    std::atomic<size_t> next{0};
+    const auto run = [&] {
+        for (size_t i; (i = next++) < tasks.size();) results[i].emplace(runChainTask(*loaded, chains, 1, tasks[i]));
+    };
+    std::thread other(run);
+    run();
+    other.join();
+
+    const Film &film = loaded->sensor().film();
+    std::printf("%s, %s at %dx%d: chain task results, tiles (now) and dense (before)\n", scene.c_str(), name.c_str(),
+                film.cropWidth(), film.cropHeight());
+    std::printf(
+        "task  mutations  task s  tiles (of all)  film MB tiles/dense  wire KB tiles/dense  encode ms tiles/dense  "
+        "decode+merge ms tiles/dense\n");
+    ChainImage now(makeFilmBlock(*loaded)), before(makeFilmBlock(*loaded));
+    double sums[8] = {};
+    for (size_t i = 0; i < results.size(); ++i) {
+        const ChainResult &r = *results[i];
+        ChainResult dense = r;
+        dense.film = makeFilmBlock(*loaded);
+        dense.film.merge(r.film);
+        double row[8] = {sizeof(double) * r.film.storedValues() / 1e6,
+                         sizeof(double) * dense.film.storedValues() / 1e6};
+        auto t0 = std::chrono::steady_clock::now();
+        const std::string tilesWire = farm::encodeChainResult(r);
+        row[4] = msSince(t0);
+        t0 = std::chrono::steady_clock::now();
+        const std::string denseWire = farm::encodeChainResult(dense);
+        row[5] = msSince(t0);
+        row[2] = tilesWire.size() / 1e3, row[3] = denseWire.size() / 1e3;
+        t0 = std::chrono::steady_clock::now();
+        mergeChainResult(now, farm::decodeChainResult(tilesWire, makeFilmBlock(*loaded, BlockStorage::Tiles)));
+        row[6] = msSince(t0);
+        t0 = std::chrono::steady_clock::now();
+        mergeChainResult(before, farm::decodeChainResult(denseWire, makeFilmBlock(*loaded)));
+        row[7] = msSince(t0);
+        size_t present = 0;
+        for (size_t t = 0; t < r.film.tiles()->tileCount(); ++t) present += !r.film.tiles()->tile(t).empty();
+        std::printf("%4zu %10llu %7.2f %5zu/%zu  %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n", i,
+                    static_cast<unsigned long long>(r.mutations), r.seconds, present, r.film.tiles()->tileCount(),
+                    row[0], row[1], row[2], row[3], row[4], row[5], row[6], row[7]);
+        for (int k = 0; k < 8; ++k) sums[k] += row[k];
+    }
+    const double n = static_cast<double>(results.size());
+    std::printf("mean                                   %8.2f / %6.2f  %8.1f / %7.1f  %8.2f / %8.2f  %9.2f / %8.2f\n",
+                sums[0] / n, sums[1] / n, sums[2] / n, sums[3] / n, sums[4] / n, sums[5] / n, sums[6] / n, sums[7] / n);
+    const auto bits = [](std::span<const double> a, std::span<const double> b) {
+        return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
+    };
+    std::printf("merged films bitwise equal: %s\n", bits(now.film.splatData(), before.film.splatData()) &&
+                                                            bits(now.film.sumData(), before.film.sumData()) &&
+                                                            bits(now.film.weightData(), before.film.weightData())
+                                                        ? "yes"
+                                                        : "NO");
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -388,6 +471,9 @@ int main(int argc, char **argv) {
     std::vector<int> batches{1};
     double taskSeconds = 0;
     bool fakeOnly = false;
+    std::string chain;
+    int chainTasks = 8;
+    std::vector<std::string> chainParams;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool value = i + 1 < argc;
@@ -410,12 +496,22 @@ int main(int argc, char **argv) {
             taskSeconds = std::stod(argv[++i]);
         } else if (a == "--fake-only") {
             fakeOnly = true;
+        } else if (a == "--chain" && value) {
+            chain = argv[++i];
+        } else if (a == "--chain-tasks" && value) {
+            chainTasks = std::stoi(argv[++i]);
+        } else if (a == "-P" && value) {
+            chainParams.push_back(argv[++i]);
         } else if (a.rfind("--", 0) == 0) {
             std::fprintf(stderr, "bench_farm: unknown option %s\n", a.c_str());
             return 2;
         } else {
             scene = a;
         }
+    }
+    if (!chain.empty()) {
+        chainResults(scene, chain, parseNameValues(chainParams, "-P"), chainTasks);
+        return 0;
     }
     const double sampleSeconds8 = fakeOnly ? 0 : realFarm(scene, res, spp);
     std::map<int64_t, std::string> results;

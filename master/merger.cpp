@@ -165,9 +165,12 @@ v1::CompleteReply Master::ignoreResult(const std::string &worker, int64_t attemp
 
 Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec &work, std::string_view payload) const {
     const Film &film = *j.film.film;
-    const auto emptyBlock = [&] { return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter()); };
+    const auto emptyBlock = [&](BlockStorage storage) {
+        return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter(), storage);
+    };
     if (work.has_seeding()) return farm::decodeSeedingResult(payload, film, farm::fromProto(work.seeding()));
-    if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock());
+    // A chain task's film comes as tiles (render/chain.h) and is merged as such, never made dense.
+    if (work.has_chain()) return farm::decodeChainResult(payload, emptyBlock(BlockStorage::Tiles));
     std::optional<ImageBlock> block;
     {
         const std::lock_guard<std::mutex> lock(j.film.spareMu);
@@ -176,7 +179,7 @@ Master::TaskOutput Master::decodeOutput(const JobRuntime &j, const v1::TaskSpec 
             j.film.spareBlocks.pop_back();
         }
     }
-    if (!block) block.emplace(emptyBlock());
+    if (!block) block.emplace(emptyBlock(BlockStorage::Dense));
     std::vector<unsigned char> scratch;
     {
         const std::lock_guard<std::mutex> lock(scratchMu_);
@@ -196,8 +199,7 @@ size_t Master::heldBytes(const TaskOutput &output) {
     const ImageBlock *block = std::holds_alternative<ImageBlock>(output)    ? &std::get<ImageBlock>(output)
                               : std::holds_alternative<ChainResult>(output) ? &std::get<ChainResult>(output).film
                                                                             : nullptr;
-    if (!block) return 0;
-    return sizeof(double) * (block->sumData().size() + block->weightData().size() + block->splatData().size());
+    return block ? sizeof(double) * block->storedValues() : 0;
 }
 
 void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh) {

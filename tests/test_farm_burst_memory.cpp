@@ -1,9 +1,10 @@
 // Bounded memory of burst jobs at real image sizes (render/burst.h): a 1024 x 1024 mept job at one seed
 // sample per pixel stays below a stated peak resident size in the embedded renderer, the master and a
 // worker. The last round's design pooled every seed of the image before the first burst (12 GB and growing
-// at 1024² with 64 seeds per pixel); passes of (pass, block) tasks hold only the tasks in flight: a few
-// full-size films of 7 doubles per pixel (59 MB each at 1024²). Peak sizes are read from the kernel
-// (getrusage for the embedded render, VmHWM for the farm's processes), never timed.
+// at 1024² with 64 seeds per pixel); passes of (pass, block) tasks hold only the tasks in flight, whose films
+// keep only the tiles their chains deposited in (image/splat_tiles.h), beside the job's merged films of 7
+// doubles per pixel (59 MB each at 1024²). Peak sizes are read from the kernel (getrusage for the embedded
+// render, VmHWM for the farm's processes), never timed.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 
@@ -28,9 +29,10 @@ double peakMiB(pid_t pid) {
 }
 
 // The bounds, about 1.5 times the peaks measured when this test was written (embedded 310 MiB with 2 threads,
-// master 521 MiB, worker 386 MiB with 2 threads): a few films in flight, the scene and the process. They do
-// not grow with the passes; the seed pool of the last round's design alone took about 40 bytes per
-// candidate, several per pixel and seed sample.
+// master 521 MiB, worker 386 MiB with 2 threads, when every task's film covered the whole crop window; with
+// tiled films 148, 384 and 58 MiB): the films in flight, the scene and the process. They do not grow with
+// the passes; the seed pool of the last round's design alone took about 40 bytes per candidate, several per
+// pixel and seed sample.
 constexpr double kEmbeddedBoundMiB = 480, kMasterBoundMiB = 800, kWorkerBoundMiB = 600;
 
 class FarmBurstMemory : public FarmTest {};

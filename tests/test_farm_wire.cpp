@@ -75,6 +75,111 @@ TEST(FarmWire, CorruptOrMismatchedBlocksAreRefused) {
     EXPECT_THROW(pf::farm::decodeBlock(pf::farm::encodeBlock(infinite), right), FarmError);
 }
 
+// A chain task's film as tiles (image/splat_tiles.h): deposits around one spot, as a burst task's lie
+// around its band of pixels.
+ImageBlock randomTiles(const ReconstructionFilter &filter, uint32_t seed) {
+    ImageBlock b(0, 0, 200, 150, &filter, BlockStorage::Tiles);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 2000; ++i)
+        b.splat(Vec2(40 + 50 * u(rng), 70 + 30 * u(rng)), Spectrum(u(rng), u(rng) * 1e-7, u(rng) * 1e9));
+    b.splat(Vec2(1, 1), Spectrum(std::nan(""), 0, 0));  // counted as invalid, which must travel too
+    return b;
+}
+
+bool sameTiles(const ImageBlock &a, const ImageBlock &b) {
+    const SplatTiles &x = *a.tiles(), &y = *b.tiles();
+    if (x.tileCount() != y.tileCount() || a.invalidSamples() != b.invalidSamples()) return false;
+    for (size_t t = 0; t < x.tileCount(); ++t) {
+        const std::span<const double> p = x.tile(t), q = y.tile(t);
+        if (p.size() != q.size() || std::memcmp(p.data(), q.data(), p.size() * sizeof(double)) != 0) return false;
+    }
+    return true;
+}
+
+// Only the tiles present travel, bit for bit, and the decoded block has exactly those tiles.
+TEST(FarmWire, TilesRoundTripBitForBit) {
+    const GaussianFilter filter;
+    const ImageBlock original = randomTiles(filter, 3);
+    const std::string data = pf::farm::encodeBlock(original);
+    ImageBlock decoded(0, 0, 200, 150, &filter, BlockStorage::Tiles);
+    decoded.splat(Vec2(190, 140), Spectrum(1.0));  // a tile the data does not list
+    pf::farm::decodeBlock(data, decoded);
+    EXPECT_TRUE(sameTiles(original, decoded));
+    EXPECT_EQ(decoded.invalidSamples(), 1u);
+    EXPECT_EQ(decoded.storedValues(), original.storedValues());
+    constexpr size_t kTile = SplatTiles::kSize;
+    EXPECT_LT(original.storedValues(), original.tiles()->tileCount() * 3 * kTile * kTile / 4);
+    // (No bound on the bytes: zstd shrinks a dense block's runs of zeros to almost nothing too, so the same
+    // deposits take about as many bytes either way; what tiles save is the time and memory spent on zeros.)
+
+    const ImageBlock empty(0, 0, 200, 150, &filter, BlockStorage::Tiles);
+    pf::farm::decodeBlock(pf::farm::encodeBlock(empty), decoded);
+    EXPECT_TRUE(sameTiles(empty, decoded));
+    EXPECT_EQ(decoded.storedValues(), 0u);
+}
+
+// Every malformed tile block is a FarmError that says what is wrong, never a crash or a partial merge.
+TEST(FarmWire, MalformedTilesAreRefused) {
+    const GaussianFilter gaussian;
+    const BoxFilter box;
+    const ImageBlock original = randomTiles(gaussian, 4);
+    const std::string data = pf::farm::encodeBlock(original);
+    const auto refused = [&](const std::string &bad, ImageBlock block, const std::string &message) {
+        try {
+            pf::farm::decodeBlock(bad, block);
+            ADD_FAILURE() << "accepted; expected: " << message;
+        } catch (const FarmError &e) {
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+        }
+    };
+    const auto tilesBlock = [&] { return ImageBlock(0, 0, 200, 150, &gaussian, BlockStorage::Tiles); };
+    // The header: magic (4 bytes), offset, size and border (5 x 4), tile size and tiles listed (2 x 4), invalid
+    // samples (8); then the list of uint32 tile indices.
+    constexpr size_t kTileSizeAt = 24, kCountAt = 28, kListAt = 40;
+    const auto u32 = [&](const std::string &d, size_t at) {
+        uint32_t v;
+        std::memcpy(&v, d.data() + at, sizeof v);
+        return v;
+    };
+    const auto withU32 = [&](size_t at, uint32_t v) {
+        std::string d = data;
+        std::memcpy(d.data() + at, &v, sizeof v);
+        return d;
+    };
+    const uint32_t listed = u32(data, kCountAt), tileCount = static_cast<uint32_t>(original.tiles()->tileCount());
+    ASSERT_GT(listed, 2u);
+    ASSERT_GT(u32(data, kListAt), 0u);  // the deposits lie away from the film's first tile
+
+    refused(data.substr(0, 3), tilesBlock(), "truncated header");
+    refused(data.substr(0, 20), tilesBlock(), "truncated header");
+    refused(data.substr(0, kListAt + 4), tilesBlock(), "truncated tile list");
+    refused(data.substr(0, data.size() - 10), tilesBlock(), "corrupt or truncated data");
+    refused(withU32(kListAt, tileCount + 5), tilesBlock(), "out of range");
+    refused(withU32(kListAt + 4, u32(data, kListAt)), tilesBlock(), "listed twice");
+    refused(withU32(kListAt, u32(data, kListAt + 4)), tilesBlock(), "listed twice");
+    refused(withU32(kListAt + 4, u32(data, kListAt) - 1), tilesBlock(), "out of order");
+    refused(withU32(kCountAt, tileCount + 1), tilesBlock(), "tiles listed, the film has");
+    refused(withU32(kTileSizeAt, 16), tilesBlock(),
+            "tiles of 16 pixels, expected " + std::to_string(SplatTiles::kSize));
+    // One tile fewer in the list than in the body: the body's size no longer matches.
+    std::string shorter = withU32(kCountAt, listed - 1);
+    shorter.erase(kListAt + 4 * (listed - 1), 4);
+    refused(shorter, tilesBlock(), "corrupt or truncated data");
+    std::string flipped = data;
+    flipped[flipped.size() - 20] ^= 0x5a;
+    refused(flipped, tilesBlock(), "film block");
+    refused(data, ImageBlock(0, 0, 201, 150, &gaussian, BlockStorage::Tiles), "layout");
+    refused(data, ImageBlock(0, 0, 200, 150, &box, BlockStorage::Tiles), "layout");
+    refused(data, ImageBlock(0, 0, 200, 150, &gaussian), "tiles where a dense block was expected");
+    refused(pf::farm::encodeBlock(ImageBlock(0, 0, 200, 150, &gaussian)), tilesBlock(),
+            "a dense block where tiles were expected");
+    ImageBlock infinite = randomTiles(gaussian, 4);
+    infinite.tiles()->allocate(0)[7] = INFINITY;
+    refused(pf::farm::encodeBlock(infinite), tilesBlock(), "non-finite value");
+    refused("PFX1" + data.substr(4), tilesBlock(), "not a pathfarm block");
+}
+
 // Burst tasks and the luminance pilot on the wire (render/burst.h, render/pilot.h): a task's pass, plan, W
 // and what the pilot tuned (λ, medium dtheta) round-trip exactly, and a worker refuses a malformed plan or a bad
 // W, λ or dtheta with a FarmError (the master refuses a pilot result with a bad λ or dtheta alike) rather than

@@ -550,6 +550,70 @@ TEST(ImageBlock, MergedTilesEqualOneBlock) {
     EXPECT_THROW(part.merge(tiles[1]), std::invalid_argument);
 }
 
+// A chain task's film (BlockStorage::Tiles) holds exactly the splat sums of a dense block that received the
+// same splats, bit for bit, and merging it adds exactly what merging that dense block adds: filters whose
+// footprint crosses tiles (Lanczos with 16 lobes spans 33 pixels, 5 or 6 tiles) and negative lobes, no
+// filter, an offset block, splats beyond the border and invalid ones, clustered so that most tiles stay
+// unallocated.
+TEST(ImageBlock, TilesHoldTheDenseSplatsBitForBit) {
+    auto filters = allFilters();
+    filters.push_back(std::make_shared<LanczosSincFilter>(16));
+    filters.push_back(nullptr);
+    const auto sameBits = [](std::span<const double> a, std::span<const double> b) {
+        return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+    };
+    for (const auto &filter : filters) {
+        const int X = 5, Y = 3, W = 400, H = 300;
+        ImageBlock dense(X, Y, W, H, filter.get()), tiles(X, Y, W, H, filter.get(), BlockStorage::Tiles);
+        PCG32 rng(7, 3);
+        for (int i = 0; i < 3000; ++i) {
+            // Near one spot but for every 300th, which lands anywhere, outside the block and its border too.
+            const bool near = i % 300 != 0;
+            const Vec2 p = near ? Vec2(X + 60 + 25 * rng.nextDouble(), Y + 20 + 30 * rng.nextDouble())
+                                : Vec2(X - 40 + (W + 80) * rng.nextDouble(), Y - 40 + (H + 80) * rng.nextDouble());
+            const Spectrum v = i == 100 ? Spectrum(NAN) : Spectrum(rng.nextDouble(), 1e-9, 1e9 * rng.nextDouble());
+            dense.splat(p, v);
+            tiles.splat(p, v);
+        }
+        const std::string name = filter ? "filter radius " + std::to_string(filter->radius()) : "no filter";
+        EXPECT_EQ(tiles.invalidSamples(), 1u) << name;
+        EXPECT_TRUE(tiles.sumData().empty() && tiles.weightData().empty() && tiles.splatData().empty());
+        ASSERT_NE(tiles.tiles(), nullptr);
+        EXPECT_EQ(dense.tiles(), nullptr);
+        // Most of the (W + 2b) x (H + 2b) storage was never touched, so most tiles are not allocated.
+        EXPECT_LT(tiles.storedValues(), dense.splatData().size() / 2) << name;
+        EXPECT_GT(tiles.storedValues(), 0u);
+        const int b = dense.border();
+        for (int y = Y - b; y < Y + H + b; ++y)
+            for (int x = X - b; x < X + W + b; ++x) {
+                const Spectrum d = dense.splatSum(x, y), t = tiles.splatSum(x, y);
+                ASSERT_EQ(std::memcmp(&d, &t, sizeof d), 0) << name << " pixel " << x << "," << y;
+                ASSERT_EQ(tiles.weight(x, y), 0.0);
+                ASSERT_TRUE(tiles.weightedSum(x, y).isBlack());
+            }
+        EXPECT_THROW(tiles.splatSum(X - b - 1, Y), std::out_of_range);
+
+        // Merged twice into films that already hold deposits, as a task's result joins the chains' film.
+        ImageBlock viaDense(0, 0, X + W, Y + H, filter.get()), viaTiles(0, 0, X + W, Y + H, filter.get());
+        for (ImageBlock *f : {&viaDense, &viaTiles}) f->splat(Vec2(X + 70.2, Y + 30.7), Spectrum(3.0));
+        for (int k = 0; k < 2; ++k) {
+            viaDense.merge(dense);
+            viaTiles.merge(tiles);
+        }
+        EXPECT_TRUE(sameBits(viaDense.splatData(), viaTiles.splatData())) << name;
+        EXPECT_TRUE(sameBits(viaDense.sumData(), viaTiles.sumData()));
+        EXPECT_TRUE(sameBits(viaDense.weightData(), viaTiles.weightData()));
+        EXPECT_EQ(viaTiles.invalidSamples(), 2u);
+
+        EXPECT_THROW(tiles.put(Vec2(X + 1.0, Y + 1.0), Spectrum(1.0)), std::logic_error);
+        EXPECT_THROW(tiles.merge(dense), std::logic_error);
+        tiles.clear();
+        EXPECT_EQ(tiles.storedValues(), 0u);
+        EXPECT_EQ(tiles.invalidSamples(), 0u);
+        EXPECT_TRUE(tiles.splatSum(X + 70, Y + 30).isBlack());
+    }
+}
+
 // ---- film and rfilter plugins ----
 
 // Straight from this area's plugin tables, so that these tests do not depend on the other plugin areas.

@@ -36,11 +36,15 @@ int ceilInRange(double v) {
 
 }  // namespace
 
-ImageBlock::ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter)
+ImageBlock::ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter, BlockStorage storage)
     : ox_(offsetX), oy_(offsetY), w_(w), h_(h), border_(filter ? filter->borderSize() : 0), filter_(filter) {
     if (w < 0 || h < 0) throw std::invalid_argument("ImageBlock: negative size");
     if (filter && !(filter->radius() > 0 && filter->radius() <= kMaxFilterRadius))
         throw std::invalid_argument("ImageBlock: filter radius outside (0, kMaxFilterRadius]");
+    if (storage == BlockStorage::Tiles) {
+        tiles_.emplace(w + 2 * border_, h + 2 * border_);
+        return;
+    }
     const size_t pixels = static_cast<size_t>(w + 2 * border_) * static_cast<size_t>(h + 2 * border_);
     sum_.assign(3 * pixels, 0.0);
     weight_.assign(pixels, 0.0);
@@ -55,7 +59,10 @@ size_t ImageBlock::index(int x, int y) const {
     return static_cast<size_t>(sy) * static_cast<size_t>(w_ + 2 * border_) + static_cast<size_t>(sx);
 }
 
-void ImageBlock::put(const Vec2 &raster, const Spectrum &value) { deposit(raster, value, sum_, true); }
+void ImageBlock::put(const Vec2 &raster, const Spectrum &value) {
+    if (tiles_) throw std::logic_error("ImageBlock::put: a Tiles block holds splats only");
+    deposit(raster, value, sum_, true);
+}
 
 void ImageBlock::splat(const Vec2 &raster, const Spectrum &value) { deposit(raster, value, splat_, false); }
 
@@ -77,6 +84,11 @@ void ImageBlock::deposit(const Vec2 &raster, const Spectrum &value, std::vector<
         // Without a filter a sample counts, with weight one, for the pixel that contains it.
         const double x = std::floor(raster.x), y = std::floor(raster.y);
         if (x < loX || y < loY || x > hiX || y > hiY) return;
+        if (tiles_) {
+            const double one = 1.0;
+            tiles_->addRow(static_cast<int>(x) - loX, static_cast<int>(y) - loY, 1, &one, 1.0, value);
+            return;
+        }
         add(index(static_cast<int>(x), static_cast<int>(y)), 1.0);
         return;
     }
@@ -94,6 +106,10 @@ void ImageBlock::deposit(const Vec2 &raster, const Spectrum &value, std::vector<
     double wx[kMaxTaps], wy[kMaxTaps];
     for (int x = x0; x <= x1; ++x) wx[x - x0] = filter_->eval(x - px);
     for (int y = y0; y <= y1; ++y) wy[y - y0] = filter_->eval(y - py);
+    if (tiles_) {
+        for (int y = y0; y <= y1; ++y) tiles_->addRow(x0 - loX, y - loY, x1 - x0 + 1, wx, wy[y - y0], value);
+        return;
+    }
     // The footprint lies inside the storage (clamped above): rows are addressed without index()'s checks.
     const size_t stride = static_cast<size_t>(w_ + 2 * border_);
     for (int y = y0; y <= y1; ++y) {
@@ -110,7 +126,9 @@ void ImageBlock::merge(const ImageBlock &other) {
     if (oLoX < ox_ - border_ || oLoY < oy_ - border_ || oLoX + oW > ox_ + w_ + border_ ||
         oLoY + oH > oy_ + h_ + border_)
         throw std::invalid_argument("ImageBlock::merge: the other block (with its border) does not fit");
+    if (tiles_) throw std::logic_error("ImageBlock::merge: into a Tiles block");
     invalid_ += other.invalid_;
+    if (other.tiles_) return mergeTiles(*other.tiles_, oLoX, oLoY);
     if (oW == 0 || oH == 0) return;
     for (int row = 0; row < oH; ++row) {
         const size_t src = static_cast<size_t>(row) * static_cast<size_t>(oW);
@@ -123,23 +141,48 @@ void ImageBlock::merge(const ImageBlock &other) {
     }
 }
 
+void ImageBlock::mergeTiles(const SplatTiles &tiles, int loX, int loY) {
+    for (size_t t = 0; t < tiles.tileCount(); ++t) {
+        const std::span<const double> values = tiles.tile(t);
+        if (values.empty()) continue;
+        const SplatTiles::Rect r = tiles.rect(t);
+        const size_t rowValues = 3 * static_cast<size_t>(r.width);
+        for (int row = 0; row < r.height; ++row) {
+            double *dst = splat_.data() + 3 * index(loX + r.x, loY + r.y + row);
+            const double *src = values.data() + static_cast<size_t>(row) * rowValues;
+            for (size_t k = 0; k < rowValues; ++k) dst[k] += src[k];
+        }
+    }
+}
+
 void ImageBlock::clear() {
+    if (tiles_) tiles_->clear();
     std::fill(sum_.begin(), sum_.end(), 0.0);
     std::fill(weight_.begin(), weight_.end(), 0.0);
     std::fill(splat_.begin(), splat_.end(), 0.0);
     invalid_ = 0;
 }
 
+// A Tiles block has no weighted sums and weights: nothing is put() into it.
 Spectrum ImageBlock::weightedSum(int x, int y) const {
     const size_t i = index(x, y);
+    if (tiles_) return Spectrum(0.0);
     return {sum_[3 * i], sum_[3 * i + 1], sum_[3 * i + 2]};
 }
 
-double ImageBlock::weight(int x, int y) const { return weight_[index(x, y)]; }
+double ImageBlock::weight(int x, int y) const {
+    const size_t i = index(x, y);
+    return tiles_ ? 0.0 : weight_[i];
+}
 
 Spectrum ImageBlock::splatSum(int x, int y) const {
     const size_t i = index(x, y);
+    if (tiles_) return tiles_->at(x - (ox_ - border_), y - (oy_ - border_));
     return {splat_[3 * i], splat_[3 * i + 1], splat_[3 * i + 2]};
+}
+
+size_t ImageBlock::storedValues() const {
+    return sum_.size() + weight_.size() + splat_.size() + (tiles_ ? tiles_->storedValues() : 0);
 }
 
 Bitmap Film::develop(const ImageBlock &block, double splatScale) const {

@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -12,22 +13,33 @@
 #include "core/vector.h"
 #include "image/bitmap.h"
 #include "image/rfilter.h"
+#include "image/splat_tiles.h"
 #include "image/tonemap.h"
 #include "scene/object.h"
 
 namespace pf {
 
+// How an ImageBlock holds its pixels: Dense, arrays of all 7 doubles per pixel; Tiles, splat sums only, in
+// tiles allocated where deposits land (image/splat_tiles.h), for the film of a chain task (render/chain.h).
+// A storage mode rather than a type of its own, so that the chains keep depositing through ImageBlock& and
+// the codec, the merge and the master handle one kind of block.
+enum class BlockStorage { Dense, Tiles };
+
 class ImageBlock {
 public:
     // A block covering raster pixels [offsetX, offsetX+w) x [offsetY, offsetY+h) of a film of size
     // (filmW, filmH), with a border of the filter's radius so that samples near the edge are kept.
-    ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter);
-    // Filtered sample: adds filter(x) * value and filter(x) weight to nearby pixels.
+    ImageBlock(int offsetX, int offsetY, int w, int h, const ReconstructionFilter *filter,
+               BlockStorage storage = BlockStorage::Dense);
+    // Filtered sample: adds filter(x) * value and filter(x) weight to nearby pixels. A Tiles block holds
+    // splats only: put() on it throws std::logic_error.
     void put(const Vec2 &raster, const Spectrum &value);
     // Splat (light tracing, MLT): adds filter(x) * value to nearby pixels, kept apart from put()'s sums
     // so that it is not divided by the filter weights (see Film::develop).
     void splat(const Vec2 &raster, const Spectrum &value);
-    // Adds another block (which must lie inside this one's region incl. border) into this one.
+    // Adds another block (which must lie inside this one's region incl. border) into this one, which must
+    // be Dense; a Tiles block adds its allocated tiles only (the rest is zeros, and x + 0 = x: the same
+    // bits as adding it dense, since sums that start at +0 never hold -0).
     void merge(const ImageBlock &other);
     void clear();
     // Samples put() or splat() dropped because their value or position was NaN or infinite (Mitsuba
@@ -44,7 +56,8 @@ public:
     double weight(int x, int y) const;
     Spectrum splatSum(int x, int y) const;
     // The raw storage including the border, row-major: 3 weighted sums, 1 weight and 3 splat sums per
-    // pixel. The farm ships blocks between processes through these, bit for bit.
+    // pixel. The farm ships blocks between processes through these, bit for bit. Empty for a Tiles block,
+    // whose storage is tiles().
     std::span<const double> sumData() const { return sum_; }
     std::span<const double> weightData() const { return weight_; }
     std::span<const double> splatData() const { return splat_; }
@@ -52,16 +65,25 @@ public:
     std::span<double> weightData() { return weight_; }
     std::span<double> splatData() { return splat_; }
     void setInvalidSamples(uint64_t n) { invalid_ = n; }
+    // A Tiles block's splat sums over the storage grid (the border included); null for a Dense block.
+    const SplatTiles *tiles() const { return tiles_ ? &*tiles_ : nullptr; }
+    SplatTiles *tiles() { return tiles_ ? &*tiles_ : nullptr; }
+    // Doubles the block holds (what it costs in memory, 8 bytes each).
+    size_t storedValues() const;
 
 private:
     size_t index(int x, int y) const;
     // Adds filter(x) * value to `channels` (and filter(x) to the weights if `weighted`) around `raster`.
     void deposit(const Vec2 &raster, const Spectrum &value, std::vector<double> &channels, bool weighted);
+    // Adds the splat sums of a Tiles block whose storage starts at raster pixel (loX, loY).
+    void mergeTiles(const SplatTiles &tiles, int loX, int loY);
     int ox_, oy_, w_, h_, border_;
     const ReconstructionFilter *filter_;
     std::vector<double> sum_;     // 3 per pixel
     std::vector<double> weight_;  // 1 per pixel
     std::vector<double> splat_;   // 3 per pixel
+
+    std::optional<SplatTiles> tiles_;  // instead of the three arrays in a Tiles block
     uint64_t invalid_ = 0;
 };
 

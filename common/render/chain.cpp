@@ -84,7 +84,8 @@ void runOrdered(size_t n, int threads, const Run &run, const Merge &merge) {
 ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task) {
     const auto start = Clock::now();
     const uint64_t rays0 = Scene::threadRayCount();
-    ChainResult result{makeFilmBlock(scene), 0, 0, integrator.mutationTypes(), {}, 0, 0};
+    // Tiles: a chain's deposits cover little of the window (a burst task's stay near its band of pixels).
+    ChainResult result{makeFilmBlock(scene, BlockStorage::Tiles), 0, 0, integrator.mutationTypes(), {}, 0, 0};
     const std::vector<ChainSeed> seeds = integrator.taskSeeds(scene, seed, task, result.seedSamples);
     PCG32 rng(hashCombine(seed, task.index), kChainStream);
     for (const ChainSeed &s : seeds)

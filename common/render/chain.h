@@ -45,7 +45,7 @@ struct ChainTask {
 };
 
 struct ChainResult {
-    ImageBlock film;  // unnormalized deposits (splats) over the crop window
+    ImageBlock film;  // unnormalized deposits (splats) over the crop window, in tiles (BlockStorage::Tiles)
     uint64_t mutations = 0;
     uint64_t seedSamples = 0;  // BDPT samples a burst task took for its seeds
     MutationCounts counts;

@@ -49,9 +49,9 @@ std::vector<Tile> makeTiles(int width, int height) {
 
 }  // namespace
 
-ImageBlock makeFilmBlock(const Scene &scene) {
+ImageBlock makeFilmBlock(const Scene &scene, BlockStorage storage) {
     const Film &film = scene.sensor().film();
-    return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter());
+    return ImageBlock(0, 0, film.cropWidth(), film.cropHeight(), &film.filter(), storage);
 }
 
 int64_t filmPixels(const Film &film) { return int64_t{film.cropWidth()} * film.cropHeight(); }

@@ -27,8 +27,8 @@ struct ImageTaskResult {
 ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
                              const ImageTask &task, int threads);
 
-// An empty block covering the scene's crop window (what tasks are merged into).
-ImageBlock makeFilmBlock(const Scene &scene);
+// An empty block covering the scene's crop window (what tasks are merged into; Tiles: a chain task's film).
+ImageBlock makeFilmBlock(const Scene &scene, BlockStorage storage = BlockStorage::Dense);
 
 // Splits a budget of `spp` samples per pixel of a film (crop window) of `pixels` pixels into the fixed task
 // sizes used by both the embedded renderer and the farm (so that their images agree bitwise): the size of

@@ -19,14 +19,25 @@ namespace pf::farm {
 
 namespace {
 
-constexpr char kMagic[4] = {'P', 'F', 'B', '1'};
+constexpr char kMagic[4] = {'P', 'F', 'B', '1'}, kTileMagic[4] = {'P', 'F', 'T', '1'};
 
+// A Dense block: the header, then its three arrays compressed.
 struct Header {
     char magic[4];
     int32_t offsetX, offsetY, width, height, border;
     uint64_t invalidSamples;
     uint64_t values;  // doubles in the three arrays together
 };
+// A Tiles block (image/splat_tiles.h): the header, `tiles` uint32 indices of the tiles present in ascending
+// order (the storage grid's tiles row by row), then those tiles' values in that order, compressed. The
+// list is the block's whole shape, so the decoder knows how many values to expect before decompressing.
+struct TileHeader {
+    char magic[4];
+    int32_t offsetX, offsetY, width, height, border;
+    uint32_t tileSize, tiles;
+    uint64_t invalidSamples;
+};
+static_assert(sizeof(Header) == 40 && sizeof(TileHeader) == 40, "headers without padding bytes");
 static_assert(std::endian::native == std::endian::little, "the block encoding is little-endian");
 
 // Values [first, first + count) of `values` byte-shuffled doubles back into `out`: byte b of value i is
@@ -71,10 +82,17 @@ std::string layout(int ox, int oy, int w, int h, int border) {
            ") with border " + std::to_string(border);
 }
 
-}  // namespace
+template <class H>
+void checkLayout(const H &h, const ImageBlock &block) {
+    if (h.offsetX != block.offsetX() || h.offsetY != block.offsetY() || h.width != block.width() ||
+        h.height != block.height() || h.border != block.border())
+        throw FarmError("film block: layout " + layout(h.offsetX, h.offsetY, h.width, h.height, h.border) +
+                        ", expected " +
+                        layout(block.offsetX(), block.offsetY(), block.width(), block.height(), block.border()));
+}
 
-std::string encodeBlock(const ImageBlock &block, int zstdLevel) {
-    const std::span<const double> arrays[] = {block.sumData(), block.weightData(), block.splatData()};
+// Appends the arrays' doubles to `out`, byte-shuffled (all arrays as one sequence) and compressed.
+void appendCompressed(std::string &out, std::span<const std::span<const double>> arrays, int zstdLevel) {
     size_t values = 0;
     for (const auto &a : arrays) values += a.size();
     std::vector<unsigned char> shuffled(values * sizeof(double));
@@ -87,57 +105,33 @@ std::string encodeBlock(const ImageBlock &block, int zstdLevel) {
             ++i;
         }
 
-    const Header h{{kMagic[0], kMagic[1], kMagic[2], kMagic[3]},
-                   block.offsetX(),
-                   block.offsetY(),
-                   block.width(),
-                   block.height(),
-                   block.border(),
-                   block.invalidSamples(),
-                   values};
-    std::string out(sizeof h + ZSTD_compressBound(shuffled.size()), '\0');
-    std::memcpy(out.data(), &h, sizeof h);
+    const size_t head = out.size();
+    out.resize(head + ZSTD_compressBound(shuffled.size()));
     // With a content checksum, so that a block damaged at rest (a result file, a checkpoint) is refused
     // rather than merged.
     const std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx *)> cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
     if (!cctx) throw std::bad_alloc();
     ZSTD_CCtx_setParameter(cctx.get(), ZSTD_c_compressionLevel, zstdLevel);
     ZSTD_CCtx_setParameter(cctx.get(), ZSTD_c_checksumFlag, 1);
-    const size_t n =
-        ZSTD_compress2(cctx.get(), out.data() + sizeof h, out.size() - sizeof h, shuffled.data(), shuffled.size());
+    const size_t n = ZSTD_compress2(cctx.get(), out.data() + head, out.size() - head, shuffled.data(), shuffled.size());
     if (ZSTD_isError(n)) throw FarmError(std::string("block compression failed: ") + ZSTD_getErrorName(n));
-    out.resize(sizeof h + n);
-    return out;
+    out.resize(head + n);
 }
 
-void decodeBlock(std::string_view data, ImageBlock &block) {
-    std::vector<unsigned char> scratch;
-    decodeBlock(data, block, scratch);
-}
-
-void decodeBlock(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch) {
-    Header h;
-    if (data.size() < sizeof h) throw FarmError("film block: truncated header");
-    std::memcpy(&h, data.data(), sizeof h);
-    if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) throw FarmError("film block: not a pathfarm block");
-    if (h.offsetX != block.offsetX() || h.offsetY != block.offsetY() || h.width != block.width() ||
-        h.height != block.height() || h.border != block.border())
-        throw FarmError("film block: layout " + layout(h.offsetX, h.offsetY, h.width, h.height, h.border) +
-                        ", expected " +
-                        layout(block.offsetX(), block.offsetY(), block.width(), block.height(), block.border()));
-    const std::span<double> arrays[] = {block.sumData(), block.weightData(), block.splatData()};
+// Decompresses `compressed` (through `scratch`) into the arrays, which must take exactly its values; throws
+// FarmError if they do not, if the data is corrupt or if a value is not finite.
+void readCompressed(std::string_view compressed, std::span<const std::span<double>> arrays,
+                    std::vector<unsigned char> &scratch) {
     size_t values = 0;
     for (const auto &a : arrays) values += a.size();
-    if (h.values != values) throw FarmError("film block: wrong number of values");
-
-    const std::string_view compressed = data.substr(sizeof h);
     const unsigned long long content = ZSTD_getFrameContentSize(compressed.data(), compressed.size());
     if (content != values * sizeof(double)) throw FarmError("film block: corrupt or truncated data");
     if (scratch.size() < values * sizeof(double)) scratch.resize(values * sizeof(double));
     const unsigned char *shuffled = scratch.data();
     const size_t n = ZSTD_decompress(scratch.data(), values * sizeof(double), compressed.data(), compressed.size());
     if (ZSTD_isError(n) || n != values * sizeof(double))
-        throw FarmError(std::string("film block: ") + (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short data"));
+        throw FarmError(std::string("film block: corrupt or truncated data (") +
+                        (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short") + ")");
 
     size_t first = 0;
     for (const auto &a : arrays) {
@@ -147,7 +141,113 @@ void decodeBlock(std::string_view data, ImageBlock &block, std::vector<unsigned 
         for (const double v : a) finite &= std::isfinite(v);
         if (!finite) throw FarmError("film block: non-finite value");
     }
+}
+
+std::string encodeTiles(const ImageBlock &block, const SplatTiles &tiles, int zstdLevel) {
+    std::vector<uint32_t> present;
+    std::vector<std::span<const double>> arrays;
+    for (size_t t = 0; t < tiles.tileCount(); ++t)
+        if (!tiles.tile(t).empty()) {
+            present.push_back(static_cast<uint32_t>(t));
+            arrays.push_back(tiles.tile(t));
+        }
+    const TileHeader h{{kTileMagic[0], kTileMagic[1], kTileMagic[2], kTileMagic[3]},
+                       block.offsetX(),
+                       block.offsetY(),
+                       block.width(),
+                       block.height(),
+                       block.border(),
+                       SplatTiles::kSize,
+                       static_cast<uint32_t>(present.size()),
+                       block.invalidSamples()};
+    std::string out(sizeof h + present.size() * sizeof(uint32_t), '\0');
+    std::memcpy(out.data(), &h, sizeof h);
+    std::memcpy(out.data() + sizeof h, present.data(), present.size() * sizeof(uint32_t));
+    appendCompressed(out, arrays, zstdLevel);
+    return out;
+}
+
+void decodeDense(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch) {
+    Header h;
+    if (data.size() < sizeof h) throw FarmError("film block: truncated header");
+    std::memcpy(&h, data.data(), sizeof h);
+    checkLayout(h, block);
+    const std::span<double> arrays[] = {block.sumData(), block.weightData(), block.splatData()};
+    size_t values = 0;
+    for (const auto &a : arrays) values += a.size();
+    if (h.values != values) throw FarmError("film block: wrong number of values");
+    readCompressed(data.substr(sizeof h), arrays, scratch);
     block.setInvalidSamples(h.invalidSamples);
+}
+
+void decodeTiles(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch) {
+    TileHeader h;
+    if (data.size() < sizeof h) throw FarmError("film block: truncated header");
+    std::memcpy(&h, data.data(), sizeof h);
+    checkLayout(h, block);
+    if (h.tileSize != SplatTiles::kSize)
+        throw FarmError("film block: tiles of " + std::to_string(h.tileSize) + " pixels, expected " +
+                        std::to_string(SplatTiles::kSize));
+    SplatTiles &tiles = *block.tiles();
+    if (h.tiles > tiles.tileCount())
+        throw FarmError("film block: " + std::to_string(h.tiles) + " tiles listed, the film has " +
+                        std::to_string(tiles.tileCount()));
+    if (data.size() - sizeof h < h.tiles * sizeof(uint32_t)) throw FarmError("film block: truncated tile list");
+    std::vector<uint32_t> present(h.tiles);
+    std::memcpy(present.data(), data.data() + sizeof h, present.size() * sizeof(uint32_t));
+    for (size_t i = 0; i < present.size(); ++i) {
+        const uint32_t t = present[i];
+        if (t >= tiles.tileCount())
+            throw FarmError("film block: tile " + std::to_string(t) + " out of range (the film has " +
+                            std::to_string(tiles.tileCount()) + " tiles)");
+        if (i > 0 && t <= present[i - 1])
+            throw FarmError(t == present[i - 1] ? "film block: tile " + std::to_string(t) + " listed twice"
+                                                : "film block: tiles out of order (" + std::to_string(t) + " after " +
+                                                      std::to_string(present[i - 1]) + ")");
+    }
+    // The tiles are allocated only once the list is known to be sound, and exactly those listed are.
+    tiles.clear();
+    std::vector<std::span<double>> arrays;
+    for (const uint32_t t : present) arrays.push_back(tiles.allocate(t));
+    readCompressed(data.substr(sizeof h + present.size() * sizeof(uint32_t)), arrays, scratch);
+    block.setInvalidSamples(h.invalidSamples);
+}
+
+}  // namespace
+
+std::string encodeBlock(const ImageBlock &block, int zstdLevel) {
+    if (const SplatTiles *tiles = block.tiles()) return encodeTiles(block, *tiles, zstdLevel);
+    const std::span<const double> arrays[] = {block.sumData(), block.weightData(), block.splatData()};
+    size_t values = 0;
+    for (const auto &a : arrays) values += a.size();
+    const Header h{{kMagic[0], kMagic[1], kMagic[2], kMagic[3]},
+                   block.offsetX(),
+                   block.offsetY(),
+                   block.width(),
+                   block.height(),
+                   block.border(),
+                   block.invalidSamples(),
+                   values};
+    std::string out(sizeof h, '\0');
+    std::memcpy(out.data(), &h, sizeof h);
+    appendCompressed(out, arrays, zstdLevel);
+    return out;
+}
+
+void decodeBlock(std::string_view data, ImageBlock &block) {
+    std::vector<unsigned char> scratch;
+    decodeBlock(data, block, scratch);
+}
+
+void decodeBlock(std::string_view data, ImageBlock &block, std::vector<unsigned char> &scratch) {
+    if (data.size() < sizeof kMagic) throw FarmError("film block: truncated header");
+    const bool tiles = std::memcmp(data.data(), kTileMagic, sizeof kTileMagic) == 0;
+    if (!tiles && std::memcmp(data.data(), kMagic, sizeof kMagic) != 0)
+        throw FarmError("film block: not a pathfarm block");
+    if (tiles != (block.tiles() != nullptr))
+        throw FarmError(tiles ? "film block: tiles where a dense block was expected"
+                              : "film block: a dense block where tiles were expected");
+    tiles ? decodeTiles(data, block, scratch) : decodeDense(data, block, scratch);
 }
 
 }  // namespace pf::farm

@@ -18,8 +18,14 @@ Normalizer seedChains(const Scene &scene, const ChainIntegrator &integrator, uin
 }
 
 std::string chainResultBytes(const ChainResult &result) {
-    std::string bytes(reinterpret_cast<const char *>(result.film.splatData().data()),
-                      result.film.splatData().size_bytes());
+    // The film's tiles (BlockStorage::Tiles), each after its index: which tiles exist is part of the result.
+    std::string bytes;
+    const SplatTiles &tiles = *result.film.tiles();
+    for (size_t t = 0; t < tiles.tileCount(); ++t)
+        if (const std::span<const double> v = tiles.tile(t); !v.empty()) {
+            bytes += std::to_string(t) + ":";
+            bytes.append(reinterpret_cast<const char *>(v.data()), v.size_bytes());
+        }
     bytes += std::to_string(result.mutations);
     for (const MutationCount &c : result.counts)
         bytes += c.name + std::to_string(c.proposed) + "/" + std::to_string(c.accepted);

@@ -12,7 +12,7 @@ namespace pf::test {
 // Runs every seeding task of `integrator` on `scene` (with its default seeding) and sums them up.
 Normalizer seedChains(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed);
 
-// The film's splats, the mutation count and the per-type counts of a chain task's result, byte for byte.
+// The film's splat tiles, the mutation count and the per-type counts of a chain task's result, byte for byte.
 std::string chainResultBytes(const ChainResult &result);
 
 // This test executable's own path, to run one of its tests in a child process.
