@@ -32,9 +32,10 @@ const pf::Film &film() {
     return scene->sensor().film();
 }
 
-pf::ImageBlock emptyBlock() {
+// As the master decodes them (master/merger.cpp): image results into dense blocks, chain results into tiles.
+pf::ImageBlock emptyBlock(pf::BlockStorage storage = pf::BlockStorage::Dense) {
     const pf::Film &f = film();
-    return pf::ImageBlock(0, 0, f.cropWidth(), f.cropHeight(), &f.filter());
+    return pf::ImageBlock(0, 0, f.cropWidth(), f.cropHeight(), &f.filter(), storage);
 }
 
 void completeTask(const uint8_t *data, size_t size) {
@@ -52,7 +53,7 @@ void completeTask(const uint8_t *data, size_t size) {
         pf::ImageBlock block = emptyBlock();
         pf::farm::decodeBlock(payload, block);
     });
-    attempt([&] { pf::farm::decodeChainResult(payload, emptyBlock()); });
+    attempt([&] { pf::farm::decodeChainResult(payload, emptyBlock(pf::BlockStorage::Tiles)); });
     attempt([&] {
         const pf::SeedingTask task{0, static_cast<uint64_t>(film().cropWidth() * film().cropHeight()), 0};
         pf::farm::decodeSeedingResult(payload, film(), task);
@@ -83,6 +84,11 @@ std::vector<std::string> seeds() {
     seeding.depthLuminance = {0.5, 0.25};
     seeding.samples = 192;
     out.push_back(stream(pf::farm::encodeSeedingResult(seeding)));
+    // A chain result whose film holds two tiles (deposits in two corners of the 16 x 12 film).
+    pf::ChainResult chain{emptyBlock(pf::BlockStorage::Tiles), 100, 0, {}, {}, 0, 0};
+    chain.film.splat({0.5, 0.5}, pf::Spectrum(1.0));
+    chain.film.splat({15.5, 11.5}, pf::Spectrum(2.0));
+    out.push_back(stream(pf::farm::encodeChainResult(chain)));
     return out;
 }
 
