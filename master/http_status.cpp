@@ -102,6 +102,14 @@ HttpStatus::HttpStatus(Master &master, const std::string &listen)
         res.set_content("internal error\n", "text/plain");
     });
 
+    // httplib's default sets SO_REUSEPORT, with which the status port could be shared with another
+    // listener (even this master's gRPC port) and requests would go to either. SO_REUSEADDR alone still
+    // lets a restarted master rebind a port whose old connections are in TIME_WAIT.
+    s.set_socket_options([](socket_t sock) {
+        const int yes = 1;
+        setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    });
+
     const auto colon = listen.rfind(':');
     if (colon == std::string::npos) throw std::runtime_error("--http wants host:port, got '" + listen + "'");
     const std::string host = listen.substr(0, colon);

@@ -49,7 +49,7 @@ int run(const Args &a, pf::master::MasterConfig cfg) {
     pf::farm::HealthService health;
     grpc::ServerBuilder builder;
     int port = 0;
-    builder.AddListeningPort(a.listen, pf::farm::serverCredentials(a.tls), &port);
+    pf::farm::listenExclusively(builder, a.listen, pf::farm::serverCredentials(a.tls), &port);
     builder.SetMaxReceiveMessageSize(master.config().maxMessageBytes);
     builder.SetMaxSendMessageSize(master.config().maxMessageBytes);
     builder.RegisterService(&clientService);

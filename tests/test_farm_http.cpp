@@ -255,5 +255,42 @@ TEST(FarmHttpShutdown, ReadinessFailsWhileTheMasterDrains) {
     EXPECT_EQ(farm.master().wait(15s), 0) << farm.master().log();
 }
 
+// A port something already listens on is refused with an error naming it: a second master on the first one's
+// address, a worker's health service there, and a status port equal to the gRPC port. Sharing a port (SO_REUSEPORT, the
+// default of both gRPC and httplib) would split the connections between the listeners.
+TEST(FarmPorts, AnAddressInUseIsRefused) {
+    Farm farm("ports");
+    farm.startMaster();
+    const auto refused = [&](const std::vector<std::string> &extra) {
+        std::vector<std::string> argv = {
+            PATHFARM_MASTER_BIN,        "--listen",     farm.address(),         "--data",
+            farm.dir() + "/other-data", "--token-file", farm.clientTokenFile(), "--worker-token-file",
+            farm.workerTokenFile()};
+        argv.insert(argv.end(), extra.begin(), extra.end());
+        Process second(argv, farm.dir() + "/second-" + std::to_string(argv.size()) + ".log");
+        const auto code = second.wait(30s);
+        return std::make_pair(code ? *code : -999, second.log());
+    };
+    const auto [code, log] = refused({});
+    EXPECT_EQ(code, 1) << log;
+    EXPECT_NE(log.find("cannot listen on " + farm.address()), std::string::npos) << log;
+    EXPECT_TRUE(farm.master().running());
+
+    Process worker({PATHFARM_WORKER_BIN, "--master", farm.address(), "--token-file", farm.workerTokenFile(),
+                    "--health-listen", farm.address()},
+                   farm.dir() + "/worker.log");
+    EXPECT_EQ(worker.wait(30s), 1) << worker.log();
+    EXPECT_NE(worker.log().find("cannot listen on " + farm.address()), std::string::npos) << worker.log();
+
+    Farm other("ports-http");
+    const std::string same = other.address();
+    Process master({PATHFARM_MASTER_BIN, "--listen", same, "--http", same, "--data", other.dir() + "/data",
+                    "--token-file", other.clientTokenFile(), "--worker-token-file", other.workerTokenFile()},
+                   other.dir() + "/master.log");
+    const auto httpCode = master.wait(30s);
+    EXPECT_EQ(httpCode, 1) << master.log();
+    EXPECT_NE(master.log().find("cannot listen on " + same + " for HTTP"), std::string::npos) << master.log();
+}
+
 }  // namespace
 }  // namespace pf::test::farm

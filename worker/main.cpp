@@ -66,7 +66,7 @@ int main(int argc, char **argv) {
         pf::farm::HealthService healthService;
         grpc::ServerBuilder builder;
         int port = 0;
-        builder.AddListeningPort(healthListen, grpc::InsecureServerCredentials(), &port);
+        pf::farm::listenExclusively(builder, healthListen, grpc::InsecureServerCredentials(), &port);
         builder.RegisterService(&healthService);
         const std::unique_ptr<grpc::Server> health = builder.BuildAndStart();
         if (!health || port == 0) throw std::runtime_error("cannot listen on " + healthListen);

@@ -23,6 +23,12 @@ std::shared_ptr<grpc::ServerCredentials> serverCredentials(const TlsFiles &tls) 
     return grpc::SslServerCredentials(opts);
 }
 
+void listenExclusively(grpc::ServerBuilder &builder, const std::string &address,
+                       const std::shared_ptr<grpc::ServerCredentials> &credentials, int *port) {
+    builder.AddListeningPort(address, credentials, port);
+    builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+}
+
 std::shared_ptr<grpc::Channel> makeChannel(const std::string &address, const TlsFiles &tls, int maxMessageBytes) {
     std::shared_ptr<grpc::ChannelCredentials> creds;
     if (tls.ca.empty() && tls.cert.empty()) {

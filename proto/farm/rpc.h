@@ -23,6 +23,12 @@ struct TlsFiles {
 
 std::shared_ptr<grpc::ServerCredentials> serverCredentials(const TlsFiles &tls);
 
+// Adds a listening port on `address` that no other socket may share: gRPC binds with SO_REUSEPORT by
+// default, with which a second master (or worker health service) on the same address would start and
+// take part of the connections instead of failing. `*port` is set once the server is built (0: failed).
+void listenExclusively(grpc::ServerBuilder &builder, const std::string &address,
+                       const std::shared_ptr<grpc::ServerCredentials> &credentials, int *port);
+
 // A channel with the message size limit in both directions and short reconnect backoff, so that
 // workers and clients find a restarted master within seconds.
 std::shared_ptr<grpc::Channel> makeChannel(const std::string &address, const TlsFiles &tls, int maxMessageBytes);

@@ -14,8 +14,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -125,17 +127,34 @@ bool waitUntil(const std::function<bool()> &done, std::chrono::milliseconds time
     }
 }
 
-int freePort() {
+namespace {
+// A port the kernel chose for a socket bound to 127.0.0.1 and closed again.
+int unusedPort() {
     const int fd = socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in addr{};
     addr.sin_family = AF_INET;
     addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     socklen_t len = sizeof addr;
     if (bind(fd, reinterpret_cast<sockaddr *>(&addr), sizeof addr) != 0 ||
-        getsockname(fd, reinterpret_cast<sockaddr *>(&addr), &len) != 0)
+        getsockname(fd, reinterpret_cast<sockaddr *>(&addr), &len) != 0) {
+        close(fd);
         throw std::runtime_error("no free port");
+    }
     close(fd);
     return ntohs(addr.sin_port);
+}
+}  // namespace
+
+int freePort() {
+    // The kernel may hand the same free port to two calls in a row (the first was closed at once); a test
+    // that asks twice wants two ports.
+    static std::mutex mutex;
+    static std::set<int> given;
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (;;) {
+        const int port = unusedPort();
+        if (given.insert(port).second) return port;
+    }
 }
 
 const std::vector<std::string> kFastLeases = {"--lease-ms", "1500", "--heartbeat-ms", "250", "--checkpoint-ms", "300"};
