@@ -56,6 +56,27 @@ TEST_F(FarmRender, ThreeWorkersMatchTheEmbeddedRenderBitForBit) {
     EXPECT_TRUE(sameBits(ref, farm->dir() + "/again.exr"));
 }
 
+// A scene whose <sampler> is low-discrepancy: tasks cover ranges of each pixel's samples, and a sample's numbers
+// depend on its index within the pixel only (core/ld_sampler.h), so two workers splitting the samples into
+// tasks render the embedded image bit for bit, for the path tracer and for BDPT's light-tracing splats.
+TEST_F(FarmRender, LowDiscrepancySamplesMatchTheEmbeddedRenderBitForBit) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    std::string xml = pf::farm::readFile(scene);
+    const size_t at = xml.find("<sampler type=\"independent\">");
+    ASSERT_NE(at, std::string::npos);
+    xml.replace(at, std::string("<sampler type=\"independent\">").size(),
+                "<sampler type=\"ldsampler\"><integer name=\"dimension\" value=\"3\"/>");
+    writeFile(farm->dir() + "/scene", "scene.xml", xml);
+    farm->startMaster();
+    farm->startWorker(1);
+    farm->startWorker(2);
+    for (const std::string integrator : {"path", "bdpt"}) {
+        std::string farmImage, embeddedImage;
+        farm->submitMatchingEmbedded(scene, "--integrator " + integrator + " --spp 40 --seed 3", farmImage,
+                                     embeddedImage);
+    }
+}
+
 TEST_F(FarmRender, KilledWorkersDoNotChangeTheImage) {
     // Tasks of a few hundred milliseconds, so that a worker that has started one is killed inside it.
     const std::string scene = writeTestScene(farm->dir() + "/scene", 128, 8);

@@ -379,6 +379,34 @@ TEST(SamplerSettings, SampleCountsRoundAsInMitsuba) {
     EXPECT_THROW(count("independent", 0), SceneError);
 }
 
+// `independent` draws independent numbers; the others one low-discrepancy sequence (core/ld_sampler.h),
+// stratified in every request (halton, hammersley, sobol) or in the first `dimension` 1D and 2D requests
+// (stratified, ldsampler, default 4 as in Mitsuba).
+TEST(SamplerSettings, TypesChooseTheSequence) {
+    auto sequence = [](const std::string &type, int64_t dimension) {
+        Properties p(ObjectKind::Sampler, type, {"scene.xml", 1});
+        if (dimension != 0) p.set("dimension", Properties::Type::Integer, dimension, {"scene.xml", 2});
+        auto obj =
+            std::dynamic_pointer_cast<SamplerSettings>((*findPlugin(ObjectKind::Sampler, type))(p, LoadContext{}));
+        p.checkAllUsed();
+        return std::make_pair(obj->sequence().lowDiscrepancy, obj->sequence().dimension);
+    };
+    EXPECT_EQ(sequence("independent", 0), std::make_pair(false, 0));
+    EXPECT_EQ(sequence("stratified", 0), std::make_pair(true, 4));
+    EXPECT_EQ(sequence("ldsampler", 0), std::make_pair(true, 4));
+    EXPECT_EQ(sequence("ldsampler", 7), std::make_pair(true, 7));
+    EXPECT_EQ(sequence("halton", 0), std::make_pair(true, 0));
+    EXPECT_EQ(sequence("hammersley", 0), std::make_pair(true, 0));
+    EXPECT_EQ(sequence("sobol", 0), std::make_pair(true, 0));
+    try {
+        sequence("ldsampler", -2);
+        ADD_FAILURE() << "a negative dimension was accepted";
+    } catch (const SceneError &e) {
+        EXPECT_NE(std::string(e.what()).find("dimension"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("scene.xml"), std::string::npos) << e.what();
+    }
+}
+
 // Every scene shipped under scenes/ loads (each needs the shape, BSDF, emitter, medium and sensor
 // plugins of the other modules).
 std::vector<std::string> shippedScenes() {

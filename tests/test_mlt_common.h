@@ -61,7 +61,9 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
     // Variants of a shipped scene: "<scene>-analytic" has its sphere meshes replaced by analytic spheres (the
     // same geometry), "<scene>-thinlens" its perspective camera by a thin lens (aperture radius 0.1, focused
     // at 6, for the endpoint position perturbation on the aperture), "<scene>-largelight" (glass-egg) its light 5
-    // times as wide, so that BDPT, the reference, finds the light seen through the egg often enough.
+    // times as wide, so that BDPT, the reference, finds the light seen through the egg often enough,
+    // "<scene>-independent" its sampler replaced by `independent` and "<scene>-ldsampler" by `ldsampler` with
+    // dimension 3 (pixel samples from core/ld_sampler.h stratified in the first three 1D and 2D requests).
     struct Variant {
         std::string suffix, pattern, replacement;
     };
@@ -71,7 +73,10 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
         {"-thinlens", R"(<sensor type="perspective"\s*>)",
          R"(<sensor type="thinlens"><float name="apertureRadius" value="0.1"/><float name="focusDistance" value="6"/>)"},
         {"-largelight", R"(<default name="lightScale" value="0.1"\s*/>)",
-         R"(<default name="lightScale" value="0.5"/>)"}};
+         R"(<default name="lightScale" value="0.5"/>)"},
+        {"-independent", R"(<sampler type="[a-z]+"\s*>)", R"(<sampler type="independent">)"},
+        {"-ldsampler", R"(<sampler type="[a-z]+"\s*>)",
+         R"(<sampler type="ldsampler"><integer name="dimension" value="3"/>)"}};
     std::string base = name;
     const Variant *variant = nullptr;
     for (const Variant &v : variants)

@@ -366,7 +366,7 @@ TEST(Sensors, DefaultFilmAndSampler) {
     EXPECT_EQ(sensor->sampleCount(), 4);
 
     Properties q(ObjectKind::Sensor, "perspective", kLoc);
-    q.addChild({"", ObjectKind::Sampler, std::make_shared<SamplerSettings>(64), kLoc});
+    q.addChild({"", ObjectKind::Sampler, std::make_shared<SamplerSettings>(64, SampleSequence{}), kLoc});
     EXPECT_EQ(makeSensor(q)->sampleCount(), 64);
 }
 

@@ -32,6 +32,8 @@ TEST_P(TimeBudget, AgreesWithBDPTAtASampleBudget) {
                       testing::PrintToString(c) + " --time " + testing::PrintToString(c.seconds));
 }
 
+// cornell-box's file asks for `sobol` (pixel samples stratified in every request, core/ld_sampler.h); its copies
+// with `independent` and with `ldsampler` of dimension 3 (later requests independent) are rendered too.
 // The Markov chains leave every path to the chains (directSamples = -1), so the stopping rule is all that
 // decides how much of the image each timed render holds. volpath renders the egg filled with a medium under
 // the larger light (test_mlt_common.h's variant): volpath reaches a light behind glass only by hitting it, and
@@ -39,14 +41,14 @@ TEST_P(TimeBudget, AgreesWithBDPTAtASampleBudget) {
 // in its caustic (bench_per_sample --res 16 --spp 2048 --integrators volpath: the heavy tail, not a bias).
 const std::vector<std::pair<std::string, std::string>> kChainsOnly = {{"directSamples", "-1"},
                                                                       {"luminanceSamples", "2048"}};
-INSTANTIATE_TEST_SUITE_P(Integrators, TimeBudget,
-                         ::testing::Values(Case{"cornell-box", "path", {}}, Case{"cornell-box", "bdpt", {}},
-                                           Case{"glass-egg-largelight", "volpath", {}, 0.5, 512},
-                                           Case{"cornell-box", "pssmlt", kChainsOnly},
-                                           Case{"cornell-box", "mmlt", kChainsOnly},
-                                           Case{"cornell-box", "mlt", kChainsOnly},
-                                           Case{"veach-bidir", "memlt", kChainsOnly}),
-                         [](const auto &info) { return gtestName(info.param.scene + "_" + info.param.integrator); });
+INSTANTIATE_TEST_SUITE_P(
+    Integrators, TimeBudget,
+    ::testing::Values(Case{"cornell-box", "path", {}}, Case{"cornell-box", "bdpt", {}},
+                      Case{"cornell-box-independent", "path", {}}, Case{"cornell-box-ldsampler", "bdpt", {}},
+                      Case{"glass-egg-largelight", "volpath", {}, 0.5, 512}, Case{"cornell-box", "pssmlt", kChainsOnly},
+                      Case{"cornell-box", "mmlt", kChainsOnly}, Case{"cornell-box", "mlt", kChainsOnly},
+                      Case{"veach-bidir", "memlt", kChainsOnly}),
+    [](const auto &info) { return gtestName(info.param.scene + "_" + info.param.integrator); });
 
 }  // namespace
 }  // namespace pf::test

@@ -12,22 +12,31 @@ class Sampler {
 public:
     virtual ~Sampler() = default;
     virtual double next1D() = 0;
-    Vec2 next2D() {
+    // Two numbers used together as one point of the unit square (a pixel position, a direction):
+    // low-discrepancy samplers stratify them jointly.
+    virtual Vec2 next2D() {
         const double a = next1D();
         return {a, next1D()};
     }
 };
 
-// Independent uniform numbers. A sample is identified by (seed, pixel index, sample index); the same
+// The numbers of one pixel sample, a pure function of (seed, pixel index, sample index): the same
 // triple always yields the same stream, which is what makes renders reproducible across thread counts
-// and lets a worker regenerate a BDPT candidate path exactly (ALGORITHMS.md §2.4-2.5).
-class IndependentSampler final : public Sampler {
+// and farm tasks.
+class PixelSampler : public Sampler {
+public:
+    virtual void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) = 0;
+};
+
+// Independent uniform numbers from a PCG32 stream per pixel sample. Seeding draws from it, so that a
+// worker regenerates a BDPT candidate path exactly (ALGORITHMS.md §2.4-2.5).
+class IndependentSampler final : public PixelSampler {
 public:
     IndependentSampler() = default;
     IndependentSampler(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
         start(seed, pixelIndex, sampleIndex);
     }
-    void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
+    void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) override {
         rng_.seed(hashCombine(hashCombine(seed, pixelIndex), sampleIndex), mix64(seed) ^ pixelIndex);
     }
     double next1D() override { return rng_.nextDouble(); }

@@ -95,7 +95,8 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     std::atomic<uint64_t> rays{0};
     auto worker = [&]() {
         const uint64_t rays0 = Scene::threadRayCount();
-        IndependentSampler sampler;
+        const std::unique_ptr<PixelSampler> pixelSampler = makePixelSampler(scene.sensor().sampleSequence());
+        PixelSampler &sampler = *pixelSampler;
         for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
             const Tile &t = tiles[i];
             for (int y = t.y; y < t.y + t.h; ++y)

@@ -7,8 +7,10 @@
 // integrals and b is their sum).
 //
 // A seeding task is a pure function of (scene, algorithm, job seed, pixel range): pixel p's sample i is
-// drawn from IndependentSampler(seed, p, i) exactly as the render loop draws it, so a retried task returns
-// the same bits, and seeding with seed S takes the same samples as `bdpt` rendering with seed S.
+// drawn from IndependentSampler(seed, p, i) exactly as the render loop draws it for a scene whose sampler is
+// `independent`, so a retried task returns the same bits, and seeding with seed S takes the same samples as
+// `bdpt` rendering such a scene with seed S. Seeding draws independent numbers whatever the scene's sampler
+// (as Mitsuba's MLT-type integrators do): a chain replays its seed path from those numbers.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -70,9 +72,9 @@ std::vector<SeedingTask> seedingTasks(const Scene &scene);
 SeedingResult runSeedingTask(const Scene &scene, const SeedingConfig &config, uint64_t seed, const SeedingTask &task);
 
 // One BDPT seed sample of film pixel `pixel`, drawn from IndependentSampler(seed, pixel, sampleIndex) as the
-// render loop draws it: every strategy of a path of at least config.minDepth with a positive, finite weight
-// (its luminance times `scale`) is added to result.depthLuminance and, when `keep`, to result.candidates.
-// Seeding, the luminance pilot and burst tasks all take their samples through it.
+// render loop draws it from an `independent` sampler: every strategy of a path of at least config.minDepth with a
+// positive, finite weight (its luminance times `scale`) is added to result.depthLuminance and, when `keep`, to
+// result.candidates. Seeding, the luminance pilot and burst tasks all take their samples through it.
 void seedSample(const Scene &scene, const SeedingConfig &config, uint64_t seed, uint64_t pixel, uint64_t sampleIndex,
                 double scale, bool keep, SeedingResult &result);
 // The strategies seedSample takes from that sample: fn(strategy, weight) for each.

@@ -1,6 +1,8 @@
 #include "scene/sampler_settings.h"
 
+#include <algorithm>
 #include <bit>
+#include <limits>
 
 #include "scene/plugins.h"
 
@@ -19,18 +21,24 @@ int64_t readSampleCount(const Properties &props) {
     return n;
 }
 
-// Mitsuba's "dimension" parameter (stratified, ldsampler) sets how many dimensions get stratified
-// samples; it has no effect on independent sampling but is still validated.
-void readDimension(const Properties &props) {
-    if (props.getInt("dimension", 4) < 1) props.fail("dimension", "must be positive");
+// Mitsuba's "dimension" parameter (stratified, ldsampler): how many 1D and how many 2D requests of a
+// sample get stratified numbers (default 4); later ones draw independent numbers.
+SampleSequence readDimension(const Properties &props) {
+    const int64_t dimension = props.getInt("dimension", 4);
+    if (dimension < 1) props.fail("dimension", "must be positive");
+    return {true, static_cast<int>(std::min<int64_t>(dimension, std::numeric_limits<int>::max()))};
 }
 
 // Mitsuba's "scramble" parameter (halton, hammersley, sobol): -1 selects Mitsuba's default
-// permutation, other values a seed. Accepted for compatibility only.
-void readScramble(const Properties &props) { props.getInt("scramble", -1); }
+// permutation, other values a seed. pathfarm's sequence is scrambled by the render's seed instead, so
+// the value is read (a non-integer is an error) and has no effect.
+SampleSequence readScramble(const Properties &props) {
+    props.getInt("scramble", -1);
+    return {true, 0};
+}
 
-std::shared_ptr<Object> makeSettings(int64_t sampleCount) {
-    return std::make_shared<SamplerSettings>(static_cast<int>(sampleCount));
+std::shared_ptr<Object> makeSettings(int64_t sampleCount, SampleSequence sequence) {
+    return std::make_shared<SamplerSettings>(static_cast<int>(sampleCount), sequence);
 }
 
 }  // namespace
@@ -38,41 +46,36 @@ std::shared_ptr<Object> makeSettings(int64_t sampleCount) {
 PluginTable samplerPlugins() {
     return {
         {"independent",
-         [](const Properties &props, const LoadContext &) { return makeSettings(readSampleCount(props)); }},
+         [](const Properties &props, const LoadContext &) { return makeSettings(readSampleCount(props), {}); }},
         // Mitsuba's stratified sampler rounds the count up to the next perfect square (one sample per
         // stratum of a square grid); we keep its sample count so that spp match Mitsuba's renders.
         {"stratified",
          [](const Properties &props, const LoadContext &) {
              const int64_t n = readSampleCount(props);
-             readDimension(props);
              int64_t res = 1;
              while (res * res < n) ++res;
-             return makeSettings(res * res);
+             return makeSettings(res * res, readDimension(props));
          }},
         // Mitsuba's ldsampler (Kollig and Keller's (0,2)-sequence) rounds up to a power of two.
         {"ldsampler",
          [](const Properties &props, const LoadContext &) {
              const int64_t n = readSampleCount(props);
-             readDimension(props);
-             return makeSettings(static_cast<int64_t>(std::bit_ceil(static_cast<uint64_t>(n))));
+             return makeSettings(static_cast<int64_t>(std::bit_ceil(static_cast<uint64_t>(n))), readDimension(props));
          }},
         {"halton",
          [](const Properties &props, const LoadContext &) {
              const int64_t n = readSampleCount(props);
-             readScramble(props);
-             return makeSettings(n);
+             return makeSettings(n, readScramble(props));
          }},
         {"hammersley",
          [](const Properties &props, const LoadContext &) {
              const int64_t n = readSampleCount(props);
-             readScramble(props);
-             return makeSettings(n);
+             return makeSettings(n, readScramble(props));
          }},
         {"sobol",
          [](const Properties &props, const LoadContext &) {
              const int64_t n = readSampleCount(props);
-             readScramble(props);
-             return makeSettings(n);
+             return makeSettings(n, readScramble(props));
          }},
     };
 }

@@ -1,24 +1,26 @@
-// The scene's <sampler>: only its sample count matters to pathfarm. Mitsuba 0.6 offers several
-// low-discrepancy samplers (stratified, ldsampler, halton, hammersley, sobol); pathfarm accepts all of
-// them with their parameters so that Mitsuba scenes load unchanged, but always draws independent
-// uniform numbers from per-pixel PCG32 streams (core/rng.h). Independent samples keep every estimator
-// unbiased with simple, reproducible seeding across farm tasks, and are what MLT-type chains need
-// anyway; the price is somewhat higher variance at low sample counts than a QMC sampler would give.
+// The scene's <sampler>: its sample count, and which numbers the pixel samples of image tasks draw.
+// `independent` draws per-pixel PCG32 streams (core/rng.h); Mitsuba 0.6's low-discrepancy samplers
+// (stratified, ldsampler, halton, hammersley, sobol) all draw one progressive Owen-scrambled Sobol
+// sequence (core/ld_sampler.h, which says how that differs from Mitsuba's point sets). Markov-chain
+// integrators and their seeding draw independent numbers whatever the scene asks.
 #pragma once
 #include <cstdint>
 
+#include "core/ld_sampler.h"
 #include "scene/object.h"
 
 namespace pf {
 
 class SamplerSettings : public Object {
 public:
-    explicit SamplerSettings(int sampleCount) : sampleCount_(sampleCount) {}
+    SamplerSettings(int sampleCount, SampleSequence sequence) : sampleCount_(sampleCount), sequence_(sequence) {}
     // Samples per pixel, after the rounding the Mitsuba sampler of that name applies.
     int sampleCount() const { return sampleCount_; }
+    const SampleSequence &sequence() const { return sequence_; }
 
 private:
     int sampleCount_;
+    SampleSequence sequence_;
 };
 
 }  // namespace pf

@@ -31,14 +31,14 @@ std::shared_ptr<Film> nestedFilm(const Properties &props, const LoadContext &ctx
     return film;
 }
 
-// Mitsuba's default sampler takes 4 samples per pixel.
-int nestedSampleCount(const Properties &props) {
+// Mitsuba's default sampler is `independent` with 4 samples per pixel.
+SamplerSettings nestedSampler(const Properties &props) {
     const auto samplers = props.children(ObjectKind::Sampler);
     if (samplers.size() > 1) props.fail("a sensor takes at most one sampler");
-    if (samplers.empty()) return 4;
+    if (samplers.empty()) return SamplerSettings(4, {});
     const auto settings = std::dynamic_pointer_cast<SamplerSettings>(samplers.front());
     if (!settings) props.fail("the nested sampler is not a sampler");
-    return settings->sampleCount();
+    return *settings;
 }
 
 // Mitsuba's focalLength: a 35 mm film equivalent "<x>mm" (or a bare number), turned into the diagonal
@@ -98,7 +98,9 @@ ProjectiveCamera::ProjectiveCamera(const Properties &props, const LoadContext &c
     }
 
     film_ = nestedFilm(props, ctx);
-    sampleCount_ = nestedSampleCount(props);
+    const SamplerSettings sampler = nestedSampler(props);
+    sampleCount_ = sampler.sampleCount();
+    sampleSequence_ = sampler.sequence();
     updateProjection();
 }
 

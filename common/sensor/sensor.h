@@ -5,6 +5,7 @@
 #pragma once
 #include <memory>
 
+#include "core/ld_sampler.h"
 #include "core/spectrum.h"
 #include "core/transform.h"
 #include "scene/object.h"
@@ -57,6 +58,8 @@ public:
     const std::shared_ptr<Film> &filmPtr() const { return film_; }
     // Samples per pixel requested by the scene's <sampler> (Mitsuba's sampleCount, default 4).
     int sampleCount() const { return sampleCount_; }
+    // The numbers image tasks draw for this sensor's pixel samples (the scene's <sampler> type).
+    const SampleSequence &sampleSequence() const { return sampleSequence_; }
     double nearClip() const { return nearClip_; }
     double farClip() const { return farClip_; }
 
@@ -65,6 +68,7 @@ protected:
     std::shared_ptr<Film> film_;
     std::shared_ptr<class Medium> medium_;
     int sampleCount_ = 4;
+    SampleSequence sampleSequence_;
     double nearClip_ = 1e-2, farClip_ = 1e4;
 };
 

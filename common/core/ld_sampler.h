@@ -1,0 +1,74 @@
+// Low-discrepancy pixel samples: the scene's `stratified`, `ldsampler`, `halton`, `hammersley` and
+// `sobol` samplers. Every 1D and 2D request of a pixel sample is its own padded dimension (Kollig and
+// Keller 2002, §3; pbrt-v3 §7.4's "padding"): request d of sample i takes point i' of an Owen-scrambled
+// Sobol (0,2)-sequence (first dimension alone for 1D requests), where i' is i shuffled by a nested
+// uniform scramble and both the shuffle and the scramble are seeded by (seed, pixel, d) (Burley 2020,
+// §4-5; core/owen_sobol.h). So the first 2^m samples of every pixel are a (0,m,2)-net in each 2D request
+// and stratified in each 1D request, for every m, and progressively: a time-budgeted render stopped
+// after any count keeps the stratification of its largest power of two. Each single number is still
+// uniform on [0,1), so every estimator stays unbiased; successive samples of a pixel are not independent
+// (negatively correlated by design), which only tests that estimate variance per sample must know.
+//
+// Differences from Mitsuba 0.6, whose samplers draw other point sets: pathfarm's sample counts are not
+// known when a timed render starts, and farm tasks split a pixel's samples into ranges, so all five
+// samplers take this one progressive sequence. As in Mitsuba's `stratified` and `ldsampler`, their
+// `dimension` parameter bounds the 1D and the 2D requests that get stratified numbers; later requests
+// draw independent ones. Mitsuba's `halton`, `hammersley` and `sobol` stratify every request.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "core/sampler.h"
+
+namespace pf {
+
+// Which numbers the pixel samples of image tasks draw: what the scene's <sampler> asks for.
+struct SampleSequence {
+    bool lowDiscrepancy = false;
+    // The 1D requests and, separately, the 2D requests of a sample that get stratified numbers (Mitsuba's
+    // `dimension`); 0: all of them.
+    int dimension = 0;
+};
+
+class LowDiscrepancySampler final : public PixelSampler {
+public:
+    explicit LowDiscrepancySampler(int dimension = 0) : dimension_(dimension) {}
+    void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) override;
+    double next1D() override;
+    Vec2 next2D() override;
+
+private:
+    // The hash seeds of one request: the index shuffle, the scrambles of its coordinates and the bits below
+    // their 32-bit fractions.
+    struct RequestSeeds {
+        uint32_t shuffle, scrambleX, scrambleY;
+        uint64_t lowBitsX, lowBitsY;
+    };
+    RequestSeeds seeds(uint64_t kind, uint32_t request) const;
+    // The seeds of request `request` of kind `kind` (1 or 2 dimensions) of this pixel, computed once per pixel
+    // for the first requests.
+    const RequestSeeds &cached(uint64_t kind, uint32_t request);
+    // The independent stream of this sample, started on first use.
+    IndependentSampler &independent();
+    // A 32-bit binary fraction widened to a double in [0, 1) with `lowBits` (16 bits) below it.
+    static double toUnit(uint32_t fraction, uint64_t lowBits);
+    bool stratified(uint32_t request) const { return dimension_ == 0 || request < static_cast<uint32_t>(dimension_); }
+
+    int dimension_;
+    uint64_t seed_ = 0, pixel_ = 0, sample_ = 0, pixelSeed_ = 0;
+    bool pixelKnown_ = false;
+    uint32_t reversedIndex_ = 0;
+    uint32_t requests1D_ = 0, requests2D_ = 0;
+    std::array<RequestSeeds, 16> seeds1D_{}, seeds2D_{};
+    uint32_t known1D_ = 0, known2D_ = 0;
+    RequestSeeds scratch_{};
+    // Requests past `dimension` draw from an independent stream.
+    IndependentSampler independent_;
+    bool independentStarted_ = false;
+};
+
+// A pixel sampler of the given sequence: the independent one or a low-discrepancy one.
+std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence);
+
+}  // namespace pf
