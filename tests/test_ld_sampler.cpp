@@ -119,7 +119,7 @@ TEST(LowDiscrepancySampler, EveryPowerOfTwoRunOfAPixelIsANet) {
 // Owen scrambling makes every single point uniform: the i-th sample over many pixels (or seeds) is a sample of
 // the uniform distribution, for every i; two different requests of one sample are independent.
 TEST(LowDiscrepancySampler, EachNumberIsUniformAndRequestsAreIndependent) {
-    constexpr int kBins = 16, kPixels = 100000, kTests = 4 * 4;
+    constexpr int kBins = 32, kPixels = 400000, kTests = 4 * 4;
     LowDiscrepancySampler s;
     const std::vector<double> expected(kBins * kBins, static_cast<double>(kPixels) / (kBins * kBins));
     for (uint64_t index : {0u, 1u, 6u, 1000u}) {

@@ -5,12 +5,19 @@
 namespace pf {
 
 void LowDiscrepancySampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
-    // An image task draws all its samples of a pixel in a row: the requests' seeds depend on the pixel
-    // only and are kept until it changes.
-    if (!pixelKnown_ || seed != seed_ || pixelIndex != pixel_) {
-        seed_ = seed, pixel_ = pixelIndex, pixelKnown_ = true;
-        pixelSeed_ = hashCombine(hashCombine(seed, pixelIndex), 0x4c44u /* "LD" */);
-        known1D_ = known2D_ = 0;
+    // A request's seeds are the render's seeds of that request, xor one mask per pixel: every pixel's seeds are
+    // uniformly distributed (so is each of its numbers), and a sample costs a table lookup per request and a
+    // hash per pixel, which matters under `--time`, where each pass draws one sample of every pixel.
+    if (!seedKnown_ || seed != seed_) {
+        seed_ = seed, seedKnown_ = true, pixelKnown_ = false;
+        renderSeed_ = hashCombine(seed, 0x4c44u /* "LD" */);
+        for (uint32_t r = 0; r < kTabulated; ++r) table1D_[r] = seeds(1, r), table2D_[r] = seeds(2, r);
+    }
+    if (!pixelKnown_ || pixelIndex != pixel_) {
+        pixel_ = pixelIndex, pixelKnown_ = true;
+        const uint64_t a = hashCombine(renderSeed_, pixelIndex), b = mix64(a);
+        pixelMask_ = {static_cast<uint32_t>(a), static_cast<uint32_t>(a >> 32), static_cast<uint32_t>(b),
+                      (b >> 32) & 0xffffu, b >> 48};
     }
     // A pixel's sample counts stay far below 2^32 (scene/sampler_settings.cpp bounds them at 2^24 per
     // render); indices are taken modulo 2^32, which only repeats a pixel's points past that.
@@ -21,22 +28,17 @@ void LowDiscrepancySampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t s
 }
 
 LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::seeds(uint64_t kind, uint32_t request) const {
-    const uint64_t a = mix64(pixelSeed_ ^ ((kind << 32) | request)), b = mix64(a);
+    const uint64_t a = mix64(renderSeed_ ^ ((kind << 32) | request)), b = mix64(a);
     // The 16 bits below a 32-bit fraction are one uniform offset per pixel and request: each number stays
     // uniform on [0,1) (to 2^-48), as an Owen scramble of unlimited depth would leave it.
     return {static_cast<uint32_t>(a), static_cast<uint32_t>(a >> 32), static_cast<uint32_t>(b), (b >> 32) & 0xffffu,
             b >> 48};
 }
 
-const LowDiscrepancySampler::RequestSeeds &LowDiscrepancySampler::cached(uint64_t kind, uint32_t request) {
-    auto &table = kind == 1 ? seeds1D_ : seeds2D_;
-    uint32_t &known = kind == 1 ? known1D_ : known2D_;
-    if (request >= table.size()) {
-        scratch_ = seeds(kind, request);
-        return scratch_;
-    }
-    for (; known <= request; ++known) table[known] = seeds(kind, known);
-    return table[request];
+LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::pixelSeeds(uint64_t kind, uint32_t request) const {
+    const RequestSeeds s = request < kTabulated ? (kind == 1 ? table1D_ : table2D_)[request] : seeds(kind, request);
+    return {s.shuffle ^ pixelMask_.shuffle, s.scrambleX ^ pixelMask_.scrambleX, s.scrambleY ^ pixelMask_.scrambleY,
+            s.lowBitsX ^ pixelMask_.lowBitsX, s.lowBitsY ^ pixelMask_.lowBitsY};
 }
 
 IndependentSampler &LowDiscrepancySampler::independent() {
@@ -55,7 +57,7 @@ double LowDiscrepancySampler::toUnit(uint32_t fraction, uint64_t lowBits) {
 double LowDiscrepancySampler::next1D() {
     const uint32_t request = requests1D_++;
     if (!stratified(request)) return independent().next1D();
-    const RequestSeeds &s = cached(1, request);
+    const RequestSeeds s = pixelSeeds(1, request);
     const uint32_t first = sobol::shuffledFirstDimension(reversedIndex_, s.shuffle);
     return toUnit(sobol::nestedUniformScramble(first, s.scrambleX), s.lowBitsX);
 }
@@ -64,7 +66,7 @@ Vec2 LowDiscrepancySampler::next2D() {
     const uint32_t request = requests2D_++;
     if (!stratified(request)) return independent().next2D();
     // One shuffle for both coordinates keeps the pair a (0,2)-sequence; each coordinate has its own scramble.
-    const RequestSeeds &s = cached(2, request);
+    const RequestSeeds s = pixelSeeds(2, request);
     const uint32_t first = sobol::shuffledFirstDimension(reversedIndex_, s.shuffle);
     const uint32_t second = sobol::reverseBits(sobol::laineKarras(sobol::secondFromFirstReversed(first), s.scrambleY));
     return {toUnit(sobol::nestedUniformScramble(first, s.scrambleX), s.lowBitsX), toUnit(second, s.lowBitsY)};

@@ -2,9 +2,9 @@
 // `sobol` samplers. Every 1D and 2D request of a pixel sample is its own padded dimension (Kollig and
 // Keller 2002, §3; pbrt-v3 §7.4's "padding"): request d of sample i takes point i' of an Owen-scrambled
 // Sobol (0,2)-sequence (first dimension alone for 1D requests), where i' is i shuffled by a nested
-// uniform scramble and both the shuffle and the scramble are seeded by (seed, pixel, d) (Burley 2020,
-// §4-5; core/owen_sobol.h). So the first 2^m samples of every pixel are a (0,m,2)-net in each 2D request
-// and stratified in each 1D request, for every m, and progressively: a time-budgeted render stopped
+// uniform scramble and both the shuffle and the scramble are seeded by a hash of (seed, d) xor a hash of
+// (seed, pixel) (Burley 2020, §4-5; core/owen_sobol.h). So the first 2^m samples of every pixel are a (0,m,2)-net in
+// each 2D request and stratified in each 1D request, for every m, and progressively: a time-budgeted render stopped
 // after any count keeps the stratification of its largest power of two. Each single number is still
 // uniform on [0,1), so every estimator stays unbiased; successive samples of a pixel are not independent
 // (negatively correlated by design), which only tests that estimate variance per sample must know.
@@ -45,24 +45,25 @@ private:
         uint32_t shuffle, scrambleX, scrambleY;
         uint64_t lowBitsX, lowBitsY;
     };
+    // The render's seeds of request `request` of kind `kind` (1 or 2 dimensions).
     RequestSeeds seeds(uint64_t kind, uint32_t request) const;
-    // The seeds of request `request` of kind `kind` (1 or 2 dimensions) of this pixel, computed once per pixel
-    // for the first requests.
-    const RequestSeeds &cached(uint64_t kind, uint32_t request);
+    // The seeds of that request in this pixel: the render's, xor the pixel's mask.
+    RequestSeeds pixelSeeds(uint64_t kind, uint32_t request) const;
     // The independent stream of this sample, started on first use.
     IndependentSampler &independent();
     // A 32-bit binary fraction widened to a double in [0, 1) with `lowBits` (16 bits) below it.
     static double toUnit(uint32_t fraction, uint64_t lowBits);
     bool stratified(uint32_t request) const { return dimension_ == 0 || request < static_cast<uint32_t>(dimension_); }
 
+    // The render's seeds of the first requests of each kind, computed when the seed changes.
+    static constexpr uint32_t kTabulated = 32;
     int dimension_;
-    uint64_t seed_ = 0, pixel_ = 0, sample_ = 0, pixelSeed_ = 0;
-    bool pixelKnown_ = false;
+    uint64_t seed_ = 0, pixel_ = 0, sample_ = 0, renderSeed_ = 0;
+    bool seedKnown_ = false, pixelKnown_ = false;
+    std::array<RequestSeeds, kTabulated> table1D_{}, table2D_{};
+    RequestSeeds pixelMask_{};
     uint32_t reversedIndex_ = 0;
     uint32_t requests1D_ = 0, requests2D_ = 0;
-    std::array<RequestSeeds, 16> seeds1D_{}, seeds2D_{};
-    uint32_t known1D_ = 0, known2D_ = 0;
-    RequestSeeds scratch_{};
     // Requests past `dimension` draw from an independent stream.
     IndependentSampler independent_;
     bool independentStarted_ = false;
