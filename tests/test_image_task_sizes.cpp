@@ -2,9 +2,11 @@
 // it depends on the film and the first sample alone (so a time budget takes a prefix of what an spp budget
 // takes), it fills an spp budget exactly, and its bounds are in pixel samples, so that the first tasks of a
 // large film are short enough for a time budget (at 1024² BDPT, the old first task of 8 spp took 45 s on two
-// cores) and no task holds more pixel samples than 256 spp of a 256² film.
+// cores) and no task holds more pixel samples than 256 spp of a 256² film. Also the passes of an embedded
+// render under a time budget (timedPassSize), which the clock sizes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <vector>
 
@@ -71,6 +73,51 @@ TEST(ImageTaskSizes, AnySppBudgetIsAPrefixOfTheOpenSequenceCutAtItsEnd) {
             EXPECT_EQ(first, spp) << pixels << " px, " << spp << " spp";
         }
     }
+}
+
+// An embedded render under a time budget, on a simulated clock: each pass costs `overhead` seconds plus
+// `perSample` per sample per pixel. Returns the passes' sizes; `spent` is the clock at the end.
+std::vector<int64_t> timedPasses(double budget, double perSample, double overhead, double &spent) {
+    std::vector<int64_t> sizes;
+    ImageTask last{0, 0};
+    double lastSeconds = 0;
+    spent = 0;
+    for (int64_t size; (size = timedPassSize(budget, spent, last, lastSeconds)) > 0;) {
+        last = ImageTask{last.firstSample + last.sampleCount, size};
+        lastSeconds = overhead + perSample * static_cast<double>(size);
+        spent += lastSeconds;
+        sizes.push_back(size);
+    }
+    return sizes;
+}
+
+TEST(TimedPassSizes, PassesGrowToAFractionOfTheBudgetAndTheLastFillsIt) {
+    // 64² path tracing on two cores: about 5 ms per sample per pixel, 0.1 ms per pass of fixed costs.
+    double spent = 0;
+    const std::vector<int64_t> sizes = timedPasses(10.0, 5e-3, 1e-4, spent);
+    ASSERT_FALSE(sizes.empty());
+    EXPECT_EQ(sizes.front(), 1);
+    for (size_t i = 1; i < sizes.size(); ++i) EXPECT_LE(sizes[i], 2 * sizes[i - 1]) << "pass " << i;
+    // Passes of about 10 s / 64 (31 spp), a few to grow there, and a last one that fills what is left.
+    EXPECT_EQ(*std::max_element(sizes.begin(), sizes.end()), 31);
+    EXPECT_LE(sizes.size(), 64u + 8u);
+    EXPECT_LE(spent, 10.0);
+    // What is left is less than one more sample per pixel would take (the estimate includes the overhead).
+    EXPECT_LT(10.0 - spent, 2 * (5e-3 + 1e-4));
+    // One pass per sample per pixel, as before, spends 1000 x 0.1 ms of the 10 s on fixed costs.
+    int64_t samples = 0;
+    for (const int64_t s : sizes) samples += s;
+    EXPECT_GT(samples, static_cast<int64_t>((10.0 - 2e-2) / 5.1e-3));
+}
+
+TEST(TimedPassSizes, ASlowFilmTakesOneSamplePerPixelPerPassAndStopsBeforeOverrunning) {
+    // 1024² BDPT on two cores: 6 s per sample per pixel against a 30 s budget.
+    double spent = 0;
+    const std::vector<int64_t> sizes = timedPasses(30.0, 6.0, 0.0, spent);
+    EXPECT_EQ(sizes, std::vector<int64_t>(5, 1));
+    EXPECT_DOUBLE_EQ(spent, 30.0);
+    // A first pass longer than the budget is still taken (an image needs one sample), and nothing after it.
+    EXPECT_EQ(timedPasses(30.0, 45.0, 0.0, spent), std::vector<int64_t>{1});
 }
 
 }  // namespace

@@ -32,16 +32,21 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
     ProgressBar progress(opt.progress);
     const auto start = Clock::now();
     int64_t done = 0;
+    ImageTask last{0, 0};
     double lastTaskSeconds = 0;
     for (;;) {
         const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-        // Under a time budget the clock decides whether another whole task starts, never when one stops.
-        if (timed ? (done > 0 && elapsed + lastTaskSeconds > opt.timeLimit) : done >= targetSpp) break;
-        const ImageTask task{done, timed ? 1 : imageTaskSize(targetSpp, done, filmPixels(film))};
+        // A time budget's passes are sized by the clock (whole passes only), a sample budget's by the fixed
+        // sequence the farm shares.
+        const int64_t size = timed ? timedPassSize(opt.timeLimit, elapsed, last, lastTaskSeconds)
+                                   : imageTaskSize(targetSpp, done, filmPixels(film));
+        if (size <= 0) break;
+        const ImageTask task{done, size};
         const ImageTaskResult r = runImageTask(scene, *this, opt.seed, task, threads);
         image.merge(r.block);
         done += task.sampleCount;
         stats.rays += r.rays;
+        last = task;
         lastTaskSeconds = r.seconds;
 
         const double total = std::chrono::duration<double>(Clock::now() - start).count();
