@@ -35,15 +35,16 @@ struct Case {
     uint64_t sparseSeedingSamples = 0;  // > 0: luminanceSamples below one per pixel (render/seeding.h)
 };
 
-// 80 x 80 pixels: two seeding tasks (4096 pixels each), a direct component of 4 samples per pixel in four
-// image tasks between the chain tasks of 16384 mutations. ERPT: the luminance pilot, the direct component, then
-// 8 rounds of burst passes (one seed sample per pixel and round). mmlt seeds sparsely: 900 luminance samples make
-// runs of 7 pixels, cut at the end of each seeding task (586 + 330 runs), so a task's candidates stay in its pixels.
+// 80 x 80 pixels: 16 seeding tasks (400 pixels each, render/seeding.cpp), a direct component of 4 samples per
+// pixel in four image tasks between the chain tasks of 16384 mutations. ERPT: the luminance pilot, the direct
+// component, then 8 rounds of burst passes (one seed sample per pixel and round). mmlt seeds sparsely: 900
+// luminance samples make runs of 7 pixels, cut at the end of each seeding task (16 x 58 runs), so a task's
+// candidates stay in its pixels.
 const Case kCases[] = {
     {"pssmlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
     {"mlt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4"},
     {"erpt", "--spp 8 -P luminanceSamples=20000 -P directSamples=4 -P chainLength=20 -P numChains=0.5"},
-    {"mmlt", "--spp 8 -P luminanceSamples=900 -P directSamples=4", 586 + 330},
+    {"mmlt", "--spp 8 -P luminanceSamples=900 -P directSamples=4", 16 * 58},
 };
 
 TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
@@ -65,9 +66,10 @@ TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
         ASSERT_EQ(job.state(), v1::JOB_DONE);
         const v1::ChainStats &chain = job.chain();
         EXPECT_EQ(chain.phase(), v1::CHAIN_PHASE_CHAINS);
-        // Bursts seed with the luminance pilot alone and sample their seeds in their own tasks.
+        // Bursts seed with the luminance pilot alone and sample their seeds in their own tasks; the others
+        // split 80 x 80 pixels into 16 seeding tasks (render/seeding.cpp).
         const bool bursts = std::string(c.integrator) == "erpt";
-        EXPECT_EQ(chain.seeding_tasks(), bursts ? 1u : 2u);
+        EXPECT_EQ(chain.seeding_tasks(), bursts ? 1u : 16u);
         EXPECT_EQ(chain.direct_tasks(), 4u);  // one sample per pixel each, between the passes
         EXPECT_GT(chain.luminance(), 0);
         EXPECT_EQ(chain.candidates() > 0u, !bursts);
@@ -145,9 +147,9 @@ TEST_F(FarmChains, KilledWorkerAndRestartedMasterInTheChainPhaseDoNotChangeTheIm
     const auto [fcode, fetched] = farm->cli("fetch " + job + " -o " + farm->dir() + "/farm.exr");
     ASSERT_EQ(fcode, 0) << fetched;
     EXPECT_TRUE(sameBits(ref, farm->dir() + "/farm.exr"));
-    // Seeding (1 task), direct component (16 tasks of one sample per pixel), 24 chain tasks.
-    EXPECT_EQ(done.tasks().total(), 41);
-    expectMergedOnce(id, 41);
+    // Seeding (16 tasks at 64²), direct component (16 tasks of one sample per pixel), 24 chain tasks.
+    EXPECT_EQ(done.tasks().total(), 56);
+    expectMergedOnce(id, 56);
 }
 
 TEST_F(FarmChains, TimeBudgetIssuesWholeChainTasks) {
@@ -171,7 +173,7 @@ TEST_F(FarmChains, TimeBudgetIssuesWholeChainTasks) {
     const v1::Job job = farm->waitForJob(jobIdFrom(output), 10s);
     const int64_t direct = job.chain().direct_samples_per_pixel();
     EXPECT_EQ(direct, 2 * (mpp / 4));
-    EXPECT_EQ(job.tasks().total(), 1 + direct + mpp / 4);  // seeding, direct component, chains
+    EXPECT_EQ(job.tasks().total(), 16 + direct + mpp / 4);  // seeding (16 tasks at 64²), direct component, chains
     expectMergedOnce(job.id(), job.tasks().total());
     EXPECT_TRUE(sameBits(
         farm->embeddedRender(

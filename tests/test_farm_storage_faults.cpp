@@ -152,7 +152,7 @@ TEST_F(StorageFaults, DamagedCheckpointIsRenderedAgain) {
 // A Markov-chain job keeps its seeding results for its lifetime: the chains and b̂ depend on them, so one
 // that is damaged makes the restarted master render the whole job again, seeding first.
 TEST_F(StorageFaults, DamagedSeedingOfAChainJobIsRenderedAgain) {
-    // At 80 x 80: two seeding tasks, four direct-component tasks, then chain tasks (test_farm_chains).
+    // At 80 x 80: 16 seeding tasks, four direct-component tasks, then chain tasks (test_farm_chains).
     res = 80;
     spec = "--integrator pssmlt --spp 64 -P luminanceSamples=20000 -P directSamples=4 --seed 7 -P maxDepth=4";
     const std::vector<std::string> args = {"--lease-ms", "1500", "--heartbeat-ms", "250", "--checkpoint-ms", "200"};

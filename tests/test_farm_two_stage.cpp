@@ -82,7 +82,8 @@ TEST(FarmTwoStage, FirstStageTravelsExactlyAndMalformedOnesAreRefused) {
 class FarmTwoStageJobs : public FarmTest {};
 
 TEST_F(FarmTwoStageJobs, MatchTheEmbeddedRenderBitForBit) {
-    // 80 x 80 pixels: two seeding tasks whose first stages (10 x 10 cells) the master sums.
+    // 80 x 80 pixels: 16 seeding tasks of 400 pixels (render/seeding.cpp) whose first stages (10 x 10 cells) the
+    // master sums.
     const std::string scene = writeTestScene(farm->dir() + "/scene", 80, 8);
     farm->startMaster(kFastLeases);
     farm->startWorker(2);
@@ -98,7 +99,7 @@ TEST_F(FarmTwoStageJobs, MatchTheEmbeddedRenderBitForBit) {
         EXPECT_TRUE(sameBits(ref, out));
         const v1::Job job = farm->waitForJob(jobIdFrom(output), 10s);
         ASSERT_EQ(job.state(), v1::JOB_DONE);
-        EXPECT_EQ(job.chain().seeding_tasks(), 2u);
+        EXPECT_EQ(job.chain().seeding_tasks(), 16u);
         EXPECT_GT(job.chain().luminance(), 0);
         // The one-stage render of the same seed differs: the chains ran on another target.
         const std::string oneStage =

@@ -95,26 +95,30 @@ TEST(FirstStage, SeedingKeepsItsPoolAndAddsAnIndependentImage) {
     const auto two = makeTestIntegrator(
         *scene, "pssmlt", {{"luminanceSamples", "4096"}, {"twoStage", "true"}, {"firstStageSizeReduction", "8"}});
     const auto &a = dynamic_cast<const ChainIntegrator &>(*one), &b = dynamic_cast<const ChainIntegrator &>(*two);
+    // 32 x 32 pixels: 4 seeding tasks of 256 pixels (render/seeding.cpp); each is compared on its own, and
+    // their sums make the image's.
     const std::vector<SeedingTask> tasks = a.seedingTasks(*scene);
-    ASSERT_EQ(tasks.size(), 1u);
-    const SeedingResult r1 = a.runSeeding(*scene, 0, 11, tasks[0]), r2 = b.runSeeding(*scene, 0, 11, tasks[0]);
-    EXPECT_FALSE(r1.firstStage.enabled());
-    ASSERT_TRUE(r2.firstStage.enabled());
-    EXPECT_EQ(r2.firstStage.width, 4);
-    EXPECT_EQ(r2.firstStage.height, 4);
-    // The same candidates, each with the cell its strategy lands in.
-    ASSERT_EQ(r1.candidates.size(), r2.candidates.size());
-    for (size_t i = 0; i < r1.candidates.size(); ++i) {
-        EXPECT_EQ(r1.candidates[i].record.pixel, r2.candidates[i].record.pixel);
-        EXPECT_EQ(r1.candidates[i].weight, r2.candidates[i].weight);
-        EXPECT_LT(r2.candidates[i].cell, 16u);
+    ASSERT_EQ(tasks.size(), 4u);
+    double stage = 0, pool = 0;
+    for (const SeedingTask &task : tasks) {
+        const SeedingResult r1 = a.runSeeding(*scene, 0, 11, task), r2 = b.runSeeding(*scene, 0, 11, task);
+        EXPECT_FALSE(r1.firstStage.enabled());
+        ASSERT_TRUE(r2.firstStage.enabled());
+        EXPECT_EQ(r2.firstStage.width, 4);
+        EXPECT_EQ(r2.firstStage.height, 4);
+        // The same candidates, each with the cell its strategy lands in.
+        ASSERT_EQ(r1.candidates.size(), r2.candidates.size());
+        for (size_t i = 0; i < r1.candidates.size(); ++i) {
+            EXPECT_EQ(r1.candidates[i].record.pixel, r2.candidates[i].record.pixel);
+            EXPECT_EQ(r1.candidates[i].weight, r2.candidates[i].weight);
+            EXPECT_LT(r2.candidates[i].cell, 16u);
+        }
+        EXPECT_EQ(r1.depthLuminance, r2.depthLuminance);
+        for (double l : r2.firstStage.luminance) stage += l * 64;
+        for (double l : r2.depthLuminance) pool += l;
     }
-    EXPECT_EQ(r1.depthLuminance, r2.depthLuminance);
     // The first stage estimates the same image from other samples: its mean luminance per pixel is b̂ per
     // pixel up to noise, and not the same bits.
-    double stage = 0, pool = 0;
-    for (double l : r2.firstStage.luminance) stage += l * 64;
-    for (double l : r2.depthLuminance) pool += l;
     EXPECT_NE(stage, pool);
     EXPECT_NEAR(stage / pool, 1.0, 0.1);
 }
