@@ -19,17 +19,10 @@
 #include <cstdint>
 #include <memory>
 
+#include "core/sample_sequence.h"
 #include "core/sampler.h"
 
 namespace pf {
-
-// Which numbers the pixel samples of image tasks draw: what the scene's <sampler> asks for.
-struct SampleSequence {
-    bool lowDiscrepancy = false;
-    // The 1D requests and, separately, the 2D requests of a sample that get stratified numbers (Mitsuba's
-    // `dimension`); 0: all of them.
-    int dimension = 0;
-};
 
 class LowDiscrepancySampler final : public PixelSampler {
 public:

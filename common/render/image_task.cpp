@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/ld_sampler.h"
 #include "scene/scene.h"
 
 namespace pf {

@@ -6,7 +6,7 @@
 #pragma once
 #include <cstdint>
 
-#include "core/ld_sampler.h"
+#include "core/sample_sequence.h"
 #include "scene/object.h"
 
 namespace pf {

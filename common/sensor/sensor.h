@@ -5,7 +5,7 @@
 #pragma once
 #include <memory>
 
-#include "core/ld_sampler.h"
+#include "core/sample_sequence.h"
 #include "core/spectrum.h"
 #include "core/transform.h"
 #include "scene/object.h"
