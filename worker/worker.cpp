@@ -164,11 +164,17 @@ int Worker::run() {
         }
     }
     spdlog::info("worker={}: draining: finishing the tasks and uploads in progress", workerId());
+    int abandoned = 0;
     {
         std::unique_lock<std::mutex> lock(mu_);
         changed_.wait(lock, idle);
         changed_.wait(lock, [&] { return (uploads_.empty() && !uploading_) || stopping_; });
+        abandoned = abandoned_;
     }
+    // Said before the threads are joined, so that a drain that never ends shows in the log whether it waited
+    // for its tasks and uploads or for a thread (a suite run once saw a silent master's worker hang here).
+    spdlog::info("worker={}: drain: tasks and uploads done ({} abandoned); stopping its threads", workerId(),
+                 abandoned);
     stopping_ = true;
     changed_.notify_all();
     heartbeatThread_.join();
