@@ -30,6 +30,7 @@ int tileSize(int width, int height) {
     while (size > kMinTileSize && tiles(size) < kMinTiles) size /= 2;
     return size;
 }
+
 // Samples per pixel in one task. A task's cost to the farm's master (decoding and merging a film, bytes on
 // the wire) does not depend on its samples, so tasks grow as a job progresses: the first samples come in
 // small tasks (a responsive progress bar and live preview, fine-grained scheduling, cheap retries, and a
