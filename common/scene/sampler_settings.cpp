@@ -44,6 +44,11 @@ std::shared_ptr<Object> makeSettings(int64_t sampleCount, SampleSequence sequenc
 }  // namespace
 
 PluginTable samplerPlugins() {
+    // Mitsuba's halton, hammersley and sobol keep their sample count and take the one low-discrepancy sequence.
+    const auto scrambledSequence = [](const Properties &props, const LoadContext &) {
+        const int64_t n = readSampleCount(props);
+        return makeSettings(n, readScramble(props));
+    };
     return {
         {"independent",
          [](const Properties &props, const LoadContext &) { return makeSettings(readSampleCount(props), {}); }},
@@ -62,21 +67,9 @@ PluginTable samplerPlugins() {
              const int64_t n = readSampleCount(props);
              return makeSettings(static_cast<int64_t>(std::bit_ceil(static_cast<uint64_t>(n))), readDimension(props));
          }},
-        {"halton",
-         [](const Properties &props, const LoadContext &) {
-             const int64_t n = readSampleCount(props);
-             return makeSettings(n, readScramble(props));
-         }},
-        {"hammersley",
-         [](const Properties &props, const LoadContext &) {
-             const int64_t n = readSampleCount(props);
-             return makeSettings(n, readScramble(props));
-         }},
-        {"sobol",
-         [](const Properties &props, const LoadContext &) {
-             const int64_t n = readSampleCount(props);
-             return makeSettings(n, readScramble(props));
-         }},
+        {"halton", scrambledSequence},
+        {"hammersley", scrambledSequence},
+        {"sobol", scrambledSequence},
     };
 }
 
