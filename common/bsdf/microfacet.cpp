@@ -7,6 +7,7 @@
 #include "bsdf/bsdf_util.h"
 #include "bsdf/quadrature.h"
 #include "core/frame.h"
+#include "core/sincos.h"
 #include "texture/texture.h"
 
 namespace pf {
@@ -64,8 +65,9 @@ double beckmannSlopeFromCdf(double u) {
 Vec2 sampleBeckmannVisibleSlopes(double cosTheta, double sinTheta, const Vec2 &u) {
     if (sinTheta < 1e-7) {
         // Normal incidence: all slopes are equally visible, a 2D Gaussian sampled in polar form.
-        const double r = std::sqrt(-std::log(1.0 - u.x)), phi = 2.0 * kPi * u.y;
-        return {r * std::cos(phi), r * std::sin(phi)};
+        const double r = std::sqrt(-std::log(1.0 - u.x));
+        const SinCos phi = sinCos2Pi(u.y);
+        return {r * phi.cos, r * phi.sin};
     }
     const double a = cosTheta / sinTheta;
     const auto numerator = [a](double x) { return a * 0.5 * kSqrtPi * std::erfc(-x) + 0.5 * std::exp(-x * x); };
@@ -252,9 +254,10 @@ Vec3 MicrofacetDistribution::sampleVisibleNormal(const Vec3 &wi, const Vec2 &u) 
         const double lensq = ws.x * ws.x + ws.y * ws.y;
         const Vec3 t1 = lensq > 0 ? Vec3(-ws.y, ws.x, 0.0) / std::sqrt(lensq) : Vec3(1, 0, 0);
         const Vec3 t2 = cross(ws, t1);
-        const double r = std::sqrt(u.x), phi = 2.0 * kPi * u.y;
-        const double p1 = r * std::cos(phi), s = 0.5 * (1.0 + ws.z);
-        const double p2 = (1.0 - s) * safeSqrt(1.0 - p1 * p1) + s * r * std::sin(phi);
+        const double r = std::sqrt(u.x);
+        const SinCos phi = sinCos2Pi(u.y);
+        const double p1 = r * phi.cos, s = 0.5 * (1.0 + ws.z);
+        const double p2 = (1.0 - s) * safeSqrt(1.0 - p1 * p1) + s * r * phi.sin;
         const Vec3 nh = t1 * p1 + t2 * p2 + ws * safeSqrt(1.0 - p1 * p1 - p2 * p2);
         return normalize(Vec3(alphaU_ * nh.x, alphaV_ * nh.y, std::max(0.0, nh.z)));
     }

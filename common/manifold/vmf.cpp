@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/frame.h"
+#include "core/sincos.h"
 
 namespace pf {
 
@@ -47,8 +48,9 @@ Vec3 VonMisesFisher::sample(const Vec2 &u) const {
         oneMinusW = 2 * u.x;
     }
     oneMinusW = std::clamp(oneMinusW, 0.0, 2.0);
-    const double sinTheta = std::sqrt(oneMinusW * (2 - oneMinusW)), phi = 2 * kPi * u.y;
-    return {sinTheta * std::cos(phi), sinTheta * std::sin(phi), 1 - oneMinusW};
+    const double sinTheta = std::sqrt(oneMinusW * (2 - oneMinusW));
+    const SinCos phi = sinCos2Pi(u.y);
+    return {sinTheta * phi.cos, sinTheta * phi.sin, 1 - oneMinusW};
 }
 
 Vec3 VonMisesFisher::sample(const Vec3 &mu, const Vec2 &u) const { return Frame(mu).toWorld(sample(u)); }

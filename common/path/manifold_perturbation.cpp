@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "core/frame.h"
+#include "core/sincos.h"
 #include "manifold/generalized_geometry.h"
 #include "manifold/offset_jacobian.h"
 #include "manifold/roughness.h"
@@ -328,8 +329,9 @@ ManifoldPerturbation::GaussianOffset ManifoldPerturbation::positionKernel(const 
 
 Vec2 ManifoldPerturbation::GaussianOffset::sample(const Vec2 &u) const {
     // Box-Muller.
-    const double r = std::sqrt(-2 * variance * std::log1p(-u.x)), phi = 2 * kPi * u.y;
-    return {r * std::cos(phi), r * std::sin(phi)};
+    const double r = std::sqrt(-2 * variance * std::log1p(-u.x));
+    const SinCos phi = sinCos2Pi(u.y);
+    return {r * phi.cos, r * phi.sin};
 }
 
 double ManifoldPerturbation::GaussianOffset::eval(const Vec2 &offset) const {

@@ -2,6 +2,7 @@
 
 #include "bsdf/bsdf.h"
 #include "core/frame.h"
+#include "core/sincos.h"
 #include "integrators/visibility.h"
 #include "scene/scene.h"
 
@@ -22,8 +23,9 @@ double ReciprocalKernel::sample(double u) const { return lo_ * std::exp(logRatio
 double ReciprocalKernel::pdf(double r) const { return r >= lo_ && r <= hi_ ? 1.0 / (r * logRatio_) : 0.0; }
 
 Vec2 ReciprocalKernel::sampleOffset(const Vec2 &u) const {
-    const double r = sample(u.x), phi = 2 * kPi * u.y;
-    return {r * std::cos(phi), r * std::sin(phi)};
+    const double r = sample(u.x);
+    const SinCos phi = sinCos2Pi(u.y);
+    return {r * phi.cos, r * phi.sin};
 }
 
 double ReciprocalKernel::offsetPdf(const Vec2 &offset) const {
@@ -32,9 +34,10 @@ double ReciprocalKernel::offsetPdf(const Vec2 &offset) const {
 }
 
 Vec3 ReciprocalKernel::sampleDirection(const Vec3 &axis, const Vec2 &u) const {
-    const double theta = sample(u.x), phi = 2 * kPi * u.y;
+    const double theta = sample(u.x);
+    const SinCos phi = sinCos2Pi(u.y);
     const double sinTheta = std::sin(theta);
-    return Frame(axis).toWorld(Vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), std::cos(theta)));
+    return Frame(axis).toWorld(Vec3(sinTheta * phi.cos, sinTheta * phi.sin, std::cos(theta)));
 }
 
 double ReciprocalKernel::directionPdf(const Vec3 &axis, const Vec3 &d) const {
