@@ -162,7 +162,7 @@ TEST(ChainTask, MergeRules) {
 }
 
 // Mitsuba's directSamples: 0 hides the paths of at most two edges, -1 leaves them to the chains, and a
-// positive count renders them with BDPT beside the chains.
+// positive count renders them with volpath beside the chains.
 TEST(ChainTask, DirectSamplesSplitsTheImage) {
     auto scene = loadChainTestScene("cornell-box", 8);
     const auto total = [&](const std::string &directSamples) {

@@ -84,7 +84,7 @@ struct Estimate {
 
 Estimate render(const std::string &integrator, int maxDepth, int64_t spp, int seeds) {
     std::string xml = slabScene(maxDepth);
-    // The chain integrator renders depths 1 and 2 as its direct component (directSamples BDPT samples per
+    // The chain integrator renders depths 1 and 2 as its direct component (directSamples volpath samples per
     // pixel) and the rest with chains, whose image mean is the seeding estimate (luminanceSamples, Mitsuba's
     // default of 100000).
     if (integrator == "pssmlt")

@@ -1,6 +1,6 @@
 // The long version of test_mlt's convergence (label "long", `make test-long`): `mlt` against a BDPT
 // reference on cornell-box, veach-mis and veach-bidir at 32 x 32 with 32 independent renders each, with
-// Mitsuba's defaults (the direct component rendered by BDPT, chains for paths of three edges or more) and
+// Mitsuba's defaults (the direct component rendered by volpath, chains for paths of three edges or more) and
 // with every path left to the chains, and Veach's bidirectional mutation alone (the only ergodic one).
 #include <gtest/gtest.h>
 

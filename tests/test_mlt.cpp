@@ -116,7 +116,7 @@ TEST(MLTParameters, MitsubaNamesAndChecks) {
     EXPECT_EQ(names,
               (std::vector<std::string>{"bidirectional", "lensSubpath", "lens", "caustic", "multiChain", "none"}));
     EXPECT_EQ(mlt.directSamples(), 16);
-    EXPECT_EQ(mlt.minVertices(), 4) << "the direct component is left to BDPT by default";
+    EXPECT_EQ(mlt.minVertices(), 4) << "the direct component is rendered apart by default";
     EXPECT_EQ(mlt.seeding(*scene).samplesPerPixel, (100000 + 63) / 64) << "luminanceSamples defaults to 100000";
     const auto fails = [&](const std::vector<std::pair<std::string, std::string>> &params, const std::string &what) {
         try {

@@ -335,16 +335,18 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
 }
 
 ImageTaskResult Worker::renderImage(const Prepared &p, const v1::TaskSpec &task, int threads) const {
-    // A chain job's direct component renders with its own integrator and seed (render/chain_job.h).
-    const bool direct = task.image().direct();
-    const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
-    if (direct && !chain) throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no direct tasks");
-    const auto *integrator =
-        direct ? chain->directIntegrator() : dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
-    if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
     const uint64_t seed = task.job().seed();
-    return runImageTask(*p.scene, *integrator, direct ? directComponentSeed(seed) : seed,
-                        ImageTask{task.image().first_sample(), task.image().sample_count()}, threads);
+    const ImageTask image{task.image().first_sample(), task.image().sample_count()};
+    // A chain job's direct component renders with its own integrator, seed and numbers (render/chain_job.h).
+    if (task.image().direct()) {
+        const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
+        if (!chain || !chain->directIntegrator())
+            throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no direct tasks");
+        return runDirectTask(*p.scene, *chain, seed, image, threads);
+    }
+    const auto *integrator = dynamic_cast<const SamplingIntegrator *>(p.integrator.get());
+    if (!integrator) throw std::runtime_error("integrator '" + p.integrator->name() + "' does not run image tasks");
+    return runImageTask(*p.scene, *integrator, seed, image, threads);
 }
 
 Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int threads) const {

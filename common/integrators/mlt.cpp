@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "integrators/path.h"
 #include "path/bidirectional_mutation.h"
 #include "path/caustic_perturbation.h"
 #include "path/lens_perturbation.h"
@@ -22,8 +23,8 @@ constexpr const char *kMutationParameters[kMutationTypes] = {
     "bidirectionalMutation",  "lensSubpathMutation",  "lensPerturbation",           "causticPerturbation",
     "multiChainPerturbation", "manifoldPerturbation", "mediumDistancePerturbation", "portalPerturbation"};
 
-// The BDPT that seeds the chains and renders the direct component: every strategy, light tracing included,
-// since a path lands wherever it meets the film.
+// The BDPT that seeds the chains: every strategy, light tracing included, since a path lands wherever it meets
+// the film.
 std::unique_ptr<BDPT> makeBDPT(const SourceLocation &loc, int64_t maxDepth, int64_t rrDepth) {
     Properties p(ObjectKind::Integrator, "bdpt", loc);
     p.set("maxDepth", Properties::Type::Integer, maxDepth, loc);
@@ -83,8 +84,7 @@ PathSpaceIntegrator::PathSpaceIntegrator(const Properties &props, const std::vec
     if (types_.empty()) props.fail("bidirectionalMutation", "at least one mutation or perturbation must be enabled");
     maxDepth_ = static_cast<int>(maxDepth);
     bdpt_ = makeBDPT(props.location(), maxDepth, rrDepth);
-    if (directSamples_ > 0)
-        direct_ = makeBDPT(props.location(), maxDepth < 0 ? 2 : std::min<int64_t>(2, maxDepth), rrDepth);
+    if (directSamples_ > 0) direct_ = makeDirectComponent(props.location(), maxDepth);
 }
 
 SeedingConfig PathSpaceIntegrator::seedingWith(int64_t samplesPerPixel) const {

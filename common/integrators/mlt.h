@@ -9,7 +9,7 @@
 //   maxDepth (-1)                  longest path in edges plus index-matched crossings (path.h; -1: unbounded)
 //   rrDepth (10)                   Russian roulette of the seeding BDPT (Mitsuba's MLT hard-codes 10)
 //   directSamples (16)             samples per pixel of the direct component (paths of at most two edges),
-//                                  rendered by BDPT without chains; 0 hides it, -1 leaves it to the chains
+//                                  rendered by volpath without chains; 0 hides it, -1 leaves it to the chains
 //   luminanceSamples (100000)      BDPT samples for seeding and b̂, rounded up to whole samples per pixel
 //   bidirectionalMutation (true), lensPerturbation (true), causticPerturbation (true),
 //   multiChainPerturbation (true)  the mutations in use
@@ -50,7 +50,7 @@ namespace pf {
 // The parameter that enables a mutation type (bidirectionalMutation, lensPerturbation, ...).
 const char *mutationParameter(MutationType type);
 
-// What MLT and ERPT share: the BDPT that seeds the chains and renders the direct component, the set of
+// What MLT and ERPT share: the BDPT that seeds the chains, the direct component's path tracer, the set of
 // mutations, and the chain itself, a PathChain started on a regenerated seeding candidate.
 class PathSpaceIntegrator : public ChainIntegrator {
 public:
@@ -84,7 +84,8 @@ protected:
     SeedingConfig seedingWith(int64_t samplesPerPixel) const;
 
 private:
-    std::unique_ptr<BDPT> bdpt_, direct_;
+    std::unique_ptr<BDPT> bdpt_;
+    std::unique_ptr<SamplingIntegrator> direct_;  // integrators/path.h: makeDirectComponent
     int maxDepth_ = -1;
     int64_t directSamples_ = 16;
     double lambda_ = 50, glossyAngle_ = 0, mediumAngle_ = 0;

@@ -26,6 +26,7 @@
 //   at, and the emitter hits of the paths it estimates are left out here (caustic_connection.h).
 #include "integrators/path.h"
 
+#include <algorithm>
 #include <new>
 
 #include "bsdf/bsdf.h"
@@ -102,6 +103,12 @@ Spectrum directLight(const Scene &scene, const DirectSample &ds, const Spectrum 
 }
 
 }  // namespace
+
+std::unique_ptr<SamplingIntegrator> makeDirectComponent(const SourceLocation &loc, int64_t maxDepth) {
+    Properties p(ObjectKind::Integrator, "volpath", loc);
+    p.set("maxDepth", Properties::Type::Integer, maxDepth < 0 ? int64_t{2} : std::min<int64_t>(2, maxDepth), loc);
+    return std::make_unique<PathTracer>(p, true);
+}
 
 PathTracer::PathTracer(const Properties &props, bool media, std::shared_ptr<const CausticConnection> caustics)
     : media_(media), caustics_(std::move(caustics)) {

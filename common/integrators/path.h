@@ -24,4 +24,11 @@ private:
     std::shared_ptr<const CausticConnection> caustics_;
 };
 
+// The direct component of the Markov-chain integrators (`directSamples`: the paths of at most two segments,
+// which their chains leave out): `volpath` with maxDepth 2, or the chain integrator's maxDepth if that is
+// 1. Mitsuba 0.6 renders this component with its `direct` integrator, or `volpath` of depth 2 in scenes with
+// media (libbidir's renderDirectComponent). A BDPT of depth 2 rendered it here before: its light tracing adds
+// nothing at that depth but splats, and it took five times as long per sample (issue 17).
+std::unique_ptr<SamplingIntegrator> makeDirectComponent(const SourceLocation &loc, int64_t maxDepth);
+
 }  // namespace pf

@@ -2,13 +2,14 @@
 
 #include <cmath>
 
+#include "integrators/path.h"
 #include "scene/scene.h"
 
 namespace pf {
 
 namespace {
 
-// The BDPT that Psi, the seeding and the direct component run: every strategy, light tracing included,
+// The BDPT that Psi and the seeding run: every strategy, light tracing included,
 // since a chain's splats land wherever the path meets the film.
 std::unique_ptr<BDPT> makeBDPT(const SourceLocation &loc, int64_t maxDepth, int64_t rrDepth, bool sampleDirect) {
     Properties p(ObjectKind::Integrator, "bdpt", loc);
@@ -42,8 +43,7 @@ PrimarySampleIntegrator::PrimarySampleIntegrator(const Properties &props) {
 
     const SourceLocation &loc = props.location();
     bdpt_ = makeBDPT(loc, maxDepth, rrDepth, sampleDirect);
-    if (directSamples_ > 0)
-        direct_ = makeBDPT(loc, maxDepth < 0 ? 2 : std::min<int64_t>(2, maxDepth), rrDepth, sampleDirect);
+    if (directSamples_ > 0) direct_ = makeDirectComponent(loc, maxDepth);
 }
 
 SeedingConfig PrimarySampleIntegrator::seeding(const Scene &scene, int64_t) const {

@@ -7,7 +7,7 @@
 // Parameters (Mitsuba 0.6 names and defaults):
 //   maxDepth (-1), rrDepth (5)      path depth bounds of the underlying BDPT
 //   directSamples (16)              samples per pixel of the direct component (paths of at most two edges),
-//                                   rendered by BDPT without chains; 0 hides it, -1 leaves it to the chains
+//                                   rendered by volpath without chains; 0 hides it, -1 leaves it to the chains
 //   luminanceSamples (100000)       BDPT samples for seeding and b̂, rounded up to whole samples per pixel
 //   pLarge (0.3)                    probability of a large step
 //   kelemenStyleWeights (true)      Kelemen's MIS weights for large steps, else Veach's expected values.
@@ -67,7 +67,8 @@ protected:
                              PCG32 &rng) const = 0;
 
 private:
-    std::unique_ptr<BDPT> bdpt_, direct_;
+    std::unique_ptr<BDPT> bdpt_;
+    std::unique_ptr<SamplingIntegrator> direct_;  // integrators/path.h: makeDirectComponent
     int64_t directSamples_ = 16, luminanceSamples_ = 100000;
     bool kelemenWeights_ = true;
     int firstStageReduction_ = 0;

@@ -193,7 +193,7 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
                 continue;
             }
             const ImageTask direct = job.directTask(t);
-            const ImageTaskResult r = runImageTask(scene, *directIntegrator(), job.directSeed(), direct, threads);
+            const ImageTaskResult r = runDirectTask(scene, *this, opt.seed, direct, threads);
             stats.rays += r.rays;
             job.mergeDirect(r.block, direct.sampleCount);
         }

@@ -13,7 +13,13 @@ constexpr uint64_t kDirectSeedTag = 0xd12ec7ULL;
 
 }  // namespace
 
-uint64_t directComponentSeed(uint64_t jobSeed) { return hashCombine(jobSeed, kDirectSeedTag); }
+ImageTaskResult runDirectTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t jobSeed,
+                              const ImageTask &task, int threads) {
+    const SamplingIntegrator *direct = integrator.directIntegrator();
+    if (!direct) throw std::logic_error("a direct task of an integrator without a direct component");
+    constexpr SampleSequence kStratified{true, 0};
+    return runImageTask(scene, *direct, hashCombine(jobSeed, kDirectSeedTag), task, threads, &kStratified);
+}
 
 ChainJob::ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, int64_t spp)
     : scene_(scene),

@@ -96,7 +96,7 @@ int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, doub
 }
 
 ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
-                             const ImageTask &task, int threads) {
+                             const ImageTask &task, int threads, const SampleSequence *sequence) {
     const auto start = std::chrono::steady_clock::now();
     const Film &film = scene.sensor().film();
     const std::vector<Tile> tiles = makeTiles(film.cropWidth(), film.cropHeight());
@@ -127,7 +127,8 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     std::atomic<uint64_t> rays{0};
     auto worker = [&]() {
         const uint64_t rays0 = Scene::threadRayCount();
-        const std::unique_ptr<PixelSampler> pixelSampler = makePixelSampler(scene.sensor().sampleSequence());
+        const std::unique_ptr<PixelSampler> pixelSampler =
+            makePixelSampler(sequence ? *sequence : scene.sensor().sampleSequence());
         PixelSampler &sampler = *pixelSampler;
         for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
             const Tile &t = tiles[i];

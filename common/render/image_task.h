@@ -6,6 +6,7 @@
 #pragma once
 #include <cstdint>
 
+#include "core/sample_sequence.h"
 #include "image/film.h"
 #include "integrators/integrator.h"
 
@@ -23,9 +24,10 @@ struct ImageTaskResult {
     double seconds = 0;
 };
 
-// Runs the task on `threads` threads. Tiles are rendered in any order but merged in a fixed order.
+// Runs the task on `threads` threads. Tiles are rendered in any order but merged in a fixed order. The pixel
+// samples draw the numbers of `sequence`, or of the scene's sampler if it is null.
 ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integrator, uint64_t seed,
-                             const ImageTask &task, int threads);
+                             const ImageTask &task, int threads, const SampleSequence *sequence = nullptr);
 
 // An empty block covering the scene's crop window (what tasks are merged into; Tiles: a chain task's film).
 ImageBlock makeFilmBlock(const Scene &scene, BlockStorage storage = BlockStorage::Dense);
