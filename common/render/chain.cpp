@@ -48,35 +48,60 @@ void parallelFor(size_t n, int threads, const Fn &fn) {
     for (auto &t : pool) t.join();
 }
 
-// Runs run(i) for i in [0, n) on `threads` threads and hands each result to merge() in index order, as soon
-// as it and those before it are done. A task starts only while fewer than two per thread wait for their
-// turn, so at most 3 * threads results (films) are held, whatever n and however uneven the tasks.
-template <class Run, class Merge>
-void runOrdered(size_t n, int threads, const Run &run, const Merge &merge) {
-    using Result = decltype(run(size_t(0)));
+// Runs tasks on `threads` threads for as long as claim(wait) hands out their indices, and hands each result to
+// merge() in the order of the claims, as soon as it and those before it are done. claim() and merge() run under
+// one lock. claim() returns nothing either to stop (no more tasks are to start; the threads finish those they
+// hold) or, having set `wait`, to be asked again once another result is merged. A task starts only while fewer than two
+// per thread wait for their turn, so at most 3 * threads results (films) are held, however uneven the tasks. No thread
+// waits for another between tasks: the embedded render's chain phase had every thread wait at the end of each wave of
+// chain tasks (7% of two cores at 64², issue 17).
+template <class Claim, class Run, class Merge>
+void runOrdered(int threads, const Claim &claim, const Run &run, const Merge &merge) {
+    using Result = decltype(run(uint64_t{0}));
     std::mutex mu;
     std::condition_variable cv;
-    std::map<size_t, Result> done;
-    size_t next = 0, merged = 0;
-    const size_t window = 2 * static_cast<size_t>(threads);
-    parallelFor(n, threads, [&](size_t) {
-        size_t i;
-        {
-            std::unique_lock<std::mutex> lock(mu);
-            cv.wait(lock, [&] { return next < merged + window; });
-            i = next++;
+    std::map<uint64_t, std::pair<uint64_t, Result>> done;  // by claim number: (index, result)
+    uint64_t claimed = 0, merged = 0;
+    bool exhausted = false;
+    const uint64_t window = 2 * static_cast<uint64_t>(threads);
+    const auto worker = [&] {
+        for (;;) {
+            uint64_t number, index;
+            {
+                std::unique_lock<std::mutex> lock(mu);
+                cv.wait(lock, [&] { return exhausted || claimed < merged + window; });
+                if (exhausted) return;
+                bool wait = false;
+                const std::optional<uint64_t> c = claim(wait);
+                if (!c && wait) {
+                    // Another thread holds a task (claim() waits only for one), so a merge will come.
+                    const uint64_t m = merged;
+                    cv.wait(lock, [&] { return exhausted || merged != m; });
+                    continue;
+                }
+                if (!c) {
+                    exhausted = true;
+                    cv.notify_all();
+                    return;
+                }
+                number = claimed++, index = *c;
+            }
+            Result r = run(index);
+            const std::lock_guard<std::mutex> lock(mu);
+            done.emplace(number, std::make_pair(index, std::move(r)));
+            // Whoever completes the next result in order merges it (and those after it that wait).
+            for (auto it = done.find(merged); it != done.end(); it = done.find(merged)) {
+                merge(it->second.first, it->second.second);
+                done.erase(it);
+                ++merged;
+            }
+            cv.notify_all();
         }
-        Result r = run(i);
-        std::unique_lock<std::mutex> lock(mu);
-        done.emplace(i, std::move(r));
-        // Whoever completes the next result in order merges it (and those after it that wait), under the lock.
-        for (auto it = done.find(merged); it != done.end(); it = done.find(merged)) {
-            merge(it->second);
-            done.erase(it);
-            ++merged;
-        }
-        cv.notify_all();
-    });
+    };
+    std::vector<std::thread> pool;
+    for (int k = 1; k < threads; ++k) pool.emplace_back(worker);
+    worker();
+    for (auto &t : pool) t.join();
 }
 
 }  // namespace
@@ -159,66 +184,87 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
         job.mergeSeeding(std::move(r));
     }
 
-    // Then whole passes, each with the direct tasks before it (render/chain_job.h), in units of at least one
-    // chain task per core. Under a time budget the clock decides whether another unit starts, from the
-    // expected duration of that unit; a burst render is unbiased only over whole passes (render/burst.h).
-    const uint64_t count = job.taskCount();
+    // Then whole passes, each with the direct tasks before it (render/chain_job.h), as one stream of tasks over
+    // the threads, merged in task order. Under a time budget the clock decides whether another pass starts, from
+    // its expected duration; the tasks of a started pass all run (a burst render is unbiased only over whole
+    // passes, render/burst.h).
+    const uint64_t count = job.taskCount(), first = job.firstChainTask();
+    const auto isChain = [&](uint64_t t) { return job.phaseOf(t) == ChainJob::Phase::Chain; };
     const auto passEnd = [&](uint64_t t) {
         for (++t; t < count && !job.startsPass(t);) ++t;
         return t;
     };
-    // The clock's estimate of a unit: the direct and the chain tasks' mean wall times so far, each times
-    // their count in the unit (units differ: only some carry direct tasks, which at 1024² take seconds).
-    double directSeconds = 0, chainSeconds = 0;
-    uint64_t directDone = 0, chainDone = 0;
     const uint64_t passLimit = opt.passes > 0 ? static_cast<uint64_t>(opt.passes) : UINT64_MAX;
-    for (uint64_t next = job.firstChainTask(), passes = 0; next < count && passes < passLimit;) {
-        uint64_t end = next, chainTasks = 0;
-        while (end < count && chainTasks < static_cast<uint64_t>(threads) && passes < passLimit) {
-            const uint64_t e = passEnd(end);
-            for (uint64_t t = end; t < e; ++t) chainTasks += job.phaseOf(t) == ChainJob::Phase::Chain;
-            end = e;
+    // The clock's estimate of a pass: the direct and the chain tasks' mean times so far (each runs on one
+    // thread; passes differ: only some carry direct tasks, which at 1024² take a second or more), spread over
+    // the threads but no shorter than its longest task. Until a chain task has finished there is no estimate:
+    // once one chain task per thread has started (the first wave), the next pass waits for the first result.
+    double directSeconds = 0, chainSeconds = 0;
+    uint64_t directDone = 0, chainDone = 0, chainsClaimed = 0;
+    const auto mean = [](double seconds, uint64_t n) { return n > 0 ? seconds / static_cast<double>(n) : 0.0; };
+    uint64_t next = first, passes = 0, passStop = first;  // passStop: the end of the pass being claimed
+    const auto startsInTime = [&](uint64_t chains, uint64_t directs) {
+        const double d = mean(directSeconds, directDone), c = mean(chainSeconds, chainDone);
+        const double work = static_cast<double>(directs) * d + static_cast<double>(chains) * c;
+        const double estimate = std::max({work / threads, chains > 0 ? c : 0.0, directs > 0 ? d : 0.0});
+        return secondsSince(start) + estimate <= opt.timeLimit;
+    };
+    const auto claim = [&](bool &wait) -> std::optional<uint64_t> {
+        if (next >= count) return std::nullopt;
+        if (next == passStop) {
+            if (passes >= passLimit) return std::nullopt;
+            const uint64_t e = passEnd(next);
+            uint64_t chains = 0;
+            for (uint64_t t = next; t < e; ++t) chains += isChain(t);
+            if (timed && next > first && chains > 0 && chainDone == 0 &&
+                chainsClaimed >= static_cast<uint64_t>(threads)) {
+                wait = true;  // the first wave is out: wait for its first time
+                return std::nullopt;
+            }
+            if (timed && next > first && !startsInTime(chains, e - next - chains)) return std::nullopt;
+            passStop = e;
             ++passes;
         }
-        const uint64_t directTasks = end - next - chainTasks;
-        const double estimate =
-            (directDone > 0 ? directSeconds / static_cast<double>(directDone) * static_cast<double>(directTasks) : 0) +
-            (chainDone > 0 ? chainSeconds / static_cast<double>(chainDone) * static_cast<double>(chainTasks) : 0);
-        if (timed && next > job.firstChainTask() && secondsSince(start) + estimate > opt.timeLimit) break;
-        std::vector<uint64_t> chainIndices;
-        const auto directStart = Clock::now();
-        for (uint64_t t = next; t < end; ++t) {
-            if (job.phaseOf(t) == ChainJob::Phase::Chain) {
-                chainIndices.push_back(t);
-                continue;
-            }
-            const ImageTask direct = job.directTask(t);
-            const ImageTaskResult r = runDirectTask(scene, *this, opt.seed, direct, threads);
-            stats.rays += r.rays;
-            job.mergeDirect(r.block, direct.sampleCount);
+        chainsClaimed += isChain(next);
+        return next++;
+    };
+    struct TaskResult {
+        std::optional<ImageTaskResult> direct;
+        std::optional<ChainResult> chain;
+    };
+    const auto run = [&](uint64_t t) {
+        TaskResult r;
+        if (isChain(t))
+            r.chain = runChainTask(scene, *this, opt.seed, job.chainTask(t));
+        else
+            r.direct = runDirectTask(scene, *this, opt.seed, job.directTask(t), 1);
+        return r;
+    };
+    const auto merge = [&](uint64_t t, const TaskResult &r) {
+        if (r.chain) {
+            job.mergeChain(*r.chain);
+            chainSeconds += r.chain->seconds;
+            ++chainDone;
+        } else {
+            stats.rays += r.direct->rays;
+            job.mergeDirect(r.direct->block, job.directTask(t).sampleCount);
+            directSeconds += r.direct->seconds;
+            ++directDone;
         }
-        directSeconds += secondsSince(directStart);
-        directDone += directTasks;
-        const auto chainStart = Clock::now();
-        runOrdered(
-            chainIndices.size(), threads,
-            [&](size_t i) { return runChainTask(scene, *this, opt.seed, job.chainTask(chainIndices[i])); },
-            [&](const ChainResult &r) { job.mergeChain(r); });
-        chainSeconds += secondsSince(chainStart);
-        chainDone += chainTasks;
-        next = end;
+        if (t + 1 < count && !job.startsPass(t + 1)) return;
         char label[96];
         std::snprintf(label, sizeof label, "%llu passes, %lld mutations/px, %lld direct spp, %.1f s",
                       static_cast<unsigned long long>(job.passesMerged()),
                       static_cast<long long>(job.mutationsPerPixel()),
                       static_cast<long long>(job.directSamplesPerPixel()), secondsSince(start));
-        progress.update(timed                     ? secondsSince(start) / opt.timeLimit
-                        : passLimit != UINT64_MAX ? static_cast<double>(passes) / static_cast<double>(passLimit)
-                                                  : static_cast<double>(next - job.firstChainTask()) /
-                                                        static_cast<double>(count - job.firstChainTask()),
+        progress.update(timed ? secondsSince(start) / opt.timeLimit
+                        : passLimit != UINT64_MAX
+                            ? static_cast<double>(job.passesMerged()) / static_cast<double>(passLimit)
+                            : static_cast<double>(t + 1 - first) / static_cast<double>(count - first),
                         label);
         if (opt.onPass) opt.onPass(job.mutationsPerPixel(), job.develop());
-    }
+    };
+    runOrdered(threads, claim, run, merge);
     const ChainImage &image = job.chains();
     stats.rays += image.rays;
     stats.samples = image.mutations;
