@@ -101,6 +101,7 @@ public:
     explicit MLT(const Properties &props, bool manifoldExploration = false);
     std::string name() const override { return manifoldExploration_ ? "memlt" : "mlt"; }
     SeedingConfig seeding(const Scene &scene, int64_t spp = 0) const override;
+    uint64_t taskMutations(const Scene &scene) const override;
 
 private:
     int64_t luminanceSamples_ = 100000;

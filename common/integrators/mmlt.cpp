@@ -15,7 +15,7 @@ constexpr uint64_t kMutationsPerChain = 64;
 }  // namespace
 
 uint64_t MMLT::chainsPerTask(const Scene &scene) const {
-    return std::max<uint64_t>(1, chainTaskMutations(scene) / kMutationsPerChain);
+    return std::max<uint64_t>(1, taskMutations(scene) / kMutationsPerChain);
 }
 
 PrimarySampleIntegrator::ChainSetup MMLT::setup(const Scene &scene, const ChainTask &task, const ChainSeed &seed,

@@ -126,6 +126,8 @@ uint64_t chainTaskMutations(const Scene &scene) {
     return std::clamp(cropPixels(scene), kMinTaskMutations, kMaxTaskMutations);
 }
 
+uint64_t ChainIntegrator::taskMutations(const Scene &scene) const { return chainTaskMutations(scene); }
+
 SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed,
                                           const SeedingTask &task) const {
     return runSeedingTask(scene, seeding(scene, spp), seed, task);
@@ -142,7 +144,7 @@ double ChainIntegrator::chainImageScale(const Scene &, int64_t, const ChainImage
 }
 
 uint64_t ChainIntegrator::chainTaskCount(const Scene &scene, int64_t spp) const {
-    const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), length = chainTaskMutations(scene);
+    const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), length = taskMutations(scene);
     return (total + length - 1) / length;
 }
 
@@ -154,7 +156,7 @@ ChainTask ChainIntegrator::chainTask(const Scene &scene, const Normalizer &norma
     task.seeds = normalizer.resample(seed, index, chains);
     task.depthLuminance = normalizer.depthLuminance();
     task.firstStage = normalizer.firstStage();
-    uint64_t size = chainTaskMutations(scene);
+    uint64_t size = taskMutations(scene);
     if (spp > 0) {
         const uint64_t total = static_cast<uint64_t>(spp) * cropPixels(scene), count = chainTaskCount(scene, spp);
         size = total / count + (index < total % count ? 1 : 0);

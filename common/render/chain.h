@@ -78,14 +78,16 @@ public:
     virtual int64_t directSamples() const { return 0; }
 
     // The chain tasks of a render with `spp` mutations per pixel: how many, and task `index` (spp = 0: a
-    // time budget, where the clock decides how many tasks run and each has chainTaskMutations()). Long
-    // chains: the budget is split into tasks of at most chainTaskMutations() mutations whose sizes differ by
+    // time budget, where the clock decides how many tasks run and each has taskMutations()). Long
+    // chains: the budget is split into tasks of at most taskMutations() mutations whose sizes differ by
     // at most one, each running chainsPerTask() chains of equal length (the task's size rounded down to a
     // multiple of the chain count), their starts resampled per task (Normalizer::resample).
     virtual uint64_t chainTaskCount(const Scene &scene, int64_t spp) const;
     virtual ChainTask chainTask(const Scene &scene, const Normalizer &normalizer, uint64_t seed, int64_t spp,
                                 uint64_t index) const;
     virtual uint64_t chainsPerTask(const Scene &) const { return 1; }
+    // Mutations per long-chain task (what chainTaskCount splits a budget by): chainTaskMutations by default.
+    virtual uint64_t taskMutations(const Scene &scene) const;
     // Runs seeding task `task` of a job of `spp`: by default runSeedingTask with seeding(scene, spp).
     virtual SeedingResult runSeeding(const Scene &scene, int64_t spp, uint64_t seed, const SeedingTask &task) const;
     // The seeding tasks of a job: by default blocks of pixels (render/seeding.h) whose candidates form the
@@ -108,7 +110,7 @@ public:
 ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task);
 
 // Mutations per long-chain task: one per pixel, so that a task's film is worth shipping, but never fewer than
-// 2^14 and never more than 2^18. A time budget stops only between tasks, and 2^20 mutations (1024²) are 10-30
+// 2^14 and never more than 2^16. A time budget stops only between tasks, and 2^20 mutations (1024²) are 10-30
 // core-seconds of PSSMLT: `pssmlt --time 30` at 1024² rendered 61 s with such tasks.
 uint64_t chainTaskMutations(const Scene &scene);
 
