@@ -182,10 +182,8 @@ MLT::MLT(const Properties &props, bool manifoldExploration)
 // least a time budget can stop at. The manifold perturbation costs many times more per step: memlt, and mlt
 // with it, keep the default.
 uint64_t MLT::taskMutations(const Scene &scene) const {
-    if (usesManifoldPerturbation()) return ChainIntegrator::taskMutations(scene);
-    const Film &film = scene.sensor().film();
-    const uint64_t pixels = static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
-    return std::clamp<uint64_t>(pixels, uint64_t{1} << 14, uint64_t{1} << 18);
+    return usesManifoldPerturbation() ? ChainIntegrator::taskMutations(scene)
+                                      : chainTaskMutations(scene, uint64_t{1} << 18);
 }
 
 SeedingConfig MLT::seeding(const Scene &scene, int64_t) const {

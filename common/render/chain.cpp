@@ -23,10 +23,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr uint64_t kChainStream = 0xc4a1ULL;
-// A chain task's mutations: one per crop pixel within these bounds. The upper bound is what a timed render
-// cannot undercut (its first wave runs one task per core whatever the budget): 2^16 BDPT-evaluated
-// mutations take 2-5 s on one core for pssmlt on cornell-box or veach-bidir (2^18 took 17-35 s at 1024²).
-constexpr uint64_t kMinTaskMutations = 1u << 14, kMaxTaskMutations = 1u << 16;
+// A chain task's mutations: one per crop pixel, at least this many. The upper bound (chainTaskMutations'
+// `most`) is what a timed render cannot undercut (its first wave runs one task per core whatever the budget):
+// 2^16 BDPT-evaluated mutations take 2-5 s on one core for pssmlt on cornell-box or veach-bidir (2^18 took
+// 17-35 s at 1024²).
+constexpr uint64_t kMinTaskMutations = 1u << 14;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -122,8 +123,8 @@ ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, 
     return result;
 }
 
-uint64_t chainTaskMutations(const Scene &scene) {
-    return std::clamp(cropPixels(scene), kMinTaskMutations, kMaxTaskMutations);
+uint64_t chainTaskMutations(const Scene &scene, uint64_t most) {
+    return std::clamp(cropPixels(scene), kMinTaskMutations, std::max(most, kMinTaskMutations));
 }
 
 uint64_t ChainIntegrator::taskMutations(const Scene &scene) const { return chainTaskMutations(scene); }

@@ -110,8 +110,8 @@ public:
 ChainResult runChainTask(const Scene &scene, const ChainIntegrator &integrator, uint64_t seed, const ChainTask &task);
 
 // Mutations per long-chain task: one per pixel, so that a task's film is worth shipping, but never fewer than
-// 2^14 and never more than 2^16. A time budget stops only between tasks, and 2^20 mutations (1024²) are 10-30
-// core-seconds of PSSMLT: `pssmlt --time 30` at 1024² rendered 61 s with such tasks.
-uint64_t chainTaskMutations(const Scene &scene);
+// 2^14 and never more than `most` (2^16 by default). A time budget stops only between tasks, and 2^20 mutations
+// (1024²) are 10-30 core-seconds of PSSMLT: `pssmlt --time 30` at 1024² rendered 61 s with such tasks.
+uint64_t chainTaskMutations(const Scene &scene, uint64_t most = uint64_t{1} << 16);
 
 }  // namespace pf
