@@ -1,8 +1,43 @@
 #include "core/warp.h"
 
+#include <cstdint>
+#include <cstring>
+
 #include "core/sincos.h"
 
 namespace pf::warp {
+
+namespace {
+
+// c ? v : w through bit masks. Compilers turn a conditional on doubles into a branch, even written as
+// arithmetic on a 0-or-1 factor.
+double select(bool c, double v, double w) {
+    uint64_t bv, bw;
+    std::memcpy(&bv, &v, sizeof v);
+    std::memcpy(&bw, &w, sizeof w);
+    const uint64_t mask = 0 - static_cast<uint64_t>(c);
+    const uint64_t bits = (bv & mask) | (bw & ~mask);
+    double out;
+    std::memcpy(&out, &bits, sizeof out);
+    return out;
+}
+
+// Shirley and Chiu 1997: the angle is (pi/4) b/a in the octants around the x axis and pi/2 - (pi/4) a/b in
+// those around y, whose cosine and sine are the sine and cosine of (pi/4) a/b. The octant is chosen without
+// a branch: for uniform numbers it is a coin toss that the branch predictor loses half the time.
+// `radius2` is the point's squared distance from the centre, r^2 of the larger coordinate.
+Vec2 concentricDisk(const Vec2 &u, double &radius2) {
+    const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
+    const bool aroundX = a * a > b * b;
+    const double r = select(aroundX, a, b), other = select(aroundX, b, a);
+    radius2 = r * r;
+    if (r == 0) return {0, 0};  // only at the centre, a = b = 0
+    const SinCos phi = sinCosReduced((kPi / 4.0) * (other / r));
+    const double along = r * phi.cos, across = r * phi.sin;
+    return {select(aroundX, along, across), select(aroundX, across, along)};
+}
+
+}  // namespace
 
 Vec3 squareToUniformSphere(const Vec2 &u) {
     const double z = 1.0 - 2.0 * u.y;
@@ -19,8 +54,11 @@ Vec3 squareToUniformHemisphere(const Vec2 &u) {
 }
 
 Vec3 squareToCosineHemisphere(const Vec2 &u) {
-    const Vec2 p = squareToUniformDiskConcentric(u);
-    return {p.x, p.y, safeSqrt(1.0 - p.x * p.x - p.y * p.y)};
+    // Malley's method. The height comes from the disk radius, known before the angle's series, rather than
+    // from the point's coordinates after it.
+    double radius2;
+    const Vec2 p = concentricDisk(u, radius2);
+    return {p.x, p.y, safeSqrt(1.0 - radius2)};
 }
 
 Vec3 squareToUniformCone(const Vec2 &u, double cosCutoff) {
@@ -35,16 +73,8 @@ double squareToUniformConePdf(const Vec3 &v, double cosCutoff) {
 }
 
 Vec2 squareToUniformDiskConcentric(const Vec2 &u) {
-    const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
-    if (a == 0 && b == 0) return {0, 0};
-    // Shirley and Chiu 1997: the angle is (pi/4) b/a in the octants around the x axis and pi/2 - (pi/4) a/b
-    // in those around y, whose cosine and sine are the sine and cosine of (pi/4) a/b.
-    if (a * a > b * b) {
-        const SinCos phi = sinCosReduced((kPi / 4.0) * (b / a));
-        return {a * phi.cos, a * phi.sin};
-    }
-    const SinCos phi = sinCosReduced((kPi / 4.0) * (a / b));
-    return {b * phi.sin, b * phi.cos};
+    double radius2;
+    return concentricDisk(u, radius2);
 }
 
 Vec2 squareToUniformTriangle(const Vec2 &u) {
