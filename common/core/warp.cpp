@@ -1,7 +1,7 @@
 #include "core/warp.h"
 
+#include <bit>
 #include <cstdint>
-#include <cstring>
 
 #include "core/sincos.h"
 
@@ -12,14 +12,8 @@ namespace {
 // c ? v : w through bit masks. Compilers turn a conditional on doubles into a branch, even written as
 // arithmetic on a 0-or-1 factor.
 double select(bool c, double v, double w) {
-    uint64_t bv, bw;
-    std::memcpy(&bv, &v, sizeof v);
-    std::memcpy(&bw, &w, sizeof w);
     const uint64_t mask = 0 - static_cast<uint64_t>(c);
-    const uint64_t bits = (bv & mask) | (bw & ~mask);
-    double out;
-    std::memcpy(&out, &bits, sizeof out);
-    return out;
+    return std::bit_cast<double>((std::bit_cast<uint64_t>(v) & mask) | (std::bit_cast<uint64_t>(w) & ~mask));
 }
 
 // Shirley and Chiu 1997: the angle is (pi/4) b/a in the octants around the x axis and pi/2 - (pi/4) a/b in
