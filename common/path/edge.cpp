@@ -64,18 +64,11 @@ double failureProbability(const Medium &medium, const Ray &segment) {
 // flight, and the walk stops at an interaction, at the first surface that is not index-matched, or when
 // it leaves the scene. With a target (Connect) it must reach the target. Medium segments run between the
 // points where the walk meets surfaces, not the offset origins of the spawned rays (as in visibility.cpp).
+// `its` (cleared by the caller) receives each surface met.
 WalkEnd walk(const Scene &scene, Sampler *sampler, Ray ray, Vec3 start, const Medium *medium, const Vec3 *target,
-             Spectrum &T, SegmentDensities &densities, EdgeEnd &end, int &crossings) {
-    crossings = 0;
-    // A connection in vacuum through a scene without pass-through surfaces has nothing to cross: an
-    // occlusion query answers it without building the hit's surface point and frame (issue 17).
-    if (target && !medium && !scene.hasPassThroughSurfaces()) {
-        if (scene.occluded(ray)) return WalkEnd::Blocked;
-        densities.add(nullptr, Ray(start, ray.d, 0.0, (*target - start).length()), 1.0);
-        return WalkEnd::Reached;
-    }
-    for (; crossings < kMaxCrossings; ++crossings) {
-        Intersection its;
+             Spectrum &T, SegmentDensities &densities, EdgeEnd &end, Intersection &its, int &crossings) {
+    for (crossings = 0; crossings < kMaxCrossings; ++crossings) {
+        if (crossings > 0) its = Intersection();
         const bool hit = scene.intersect(ray, its);
         const double length = hit ? (its.p - start).length() : target ? (*target - start).length() : kInfinity;
         const Ray segment(start, ray.d, 0.0, length);
@@ -109,7 +102,6 @@ WalkEnd walk(const Scene &scene, Sampler *sampler, Ray ray, Vec3 start, const Me
         if (!bsdf || !bsdf->isNull()) {
             if (target) return WalkEnd::Blocked;
             end.kind = EdgeEnd::Kind::Surface;
-            end.its = its;
             end.medium = medium;
             return WalkEnd::Surface;
         }
@@ -135,12 +127,12 @@ void fillEdge(PathEdge &edge, const Medium *medium, const Vec3 &d, const Spectru
 }  // namespace
 
 EdgeEnd traceEdge(const Scene &scene, Sampler &sampler, Ray ray, const Vec3 &start, const Medium *medium,
-                  bool startInMedium, TransportMode mode, PathEdge &edge) {
+                  bool startInMedium, TransportMode mode, PathEdge &edge, Intersection &hit) {
     EdgeEnd end;
     Spectrum T(1.0);
     SegmentDensities densities;
     int crossings = 0;
-    const WalkEnd result = walk(scene, &sampler, ray, start, medium, nullptr, T, densities, end, crossings);
+    const WalkEnd result = walk(scene, &sampler, ray, start, medium, nullptr, T, densities, end, hit, crossings);
     if (result == WalkEnd::Blocked) T = Spectrum(0.0);
     fillEdge(edge, medium, ray.d, T, densities, startInMedium, result == WalkEnd::Medium, mode, crossings);
     return end;
@@ -148,12 +140,20 @@ EdgeEnd traceEdge(const Scene &scene, Sampler &sampler, Ray ray, const Vec3 &sta
 
 bool connectEdge(const Scene &scene, Ray ray, const Vec3 &start, const Vec3 &target, const Medium *medium,
                  bool startInMedium, bool endInMedium, TransportMode mode, PathEdge &edge) {
-    EdgeEnd unused;
     Spectrum T(1.0);
     SegmentDensities densities;
     int crossings = 0;
-    if (walk(scene, nullptr, ray, start, medium, &target, T, densities, unused, crossings) != WalkEnd::Reached)
-        return false;
+    if (!medium && !scene.hasPassThroughSurfaces()) {
+        // In vacuum through a scene without pass-through surfaces there is nothing to cross: an occlusion
+        // query answers, without a hit's surface point and frame (issue 17).
+        if (scene.occluded(ray)) return false;
+        densities.add(nullptr, Ray(start, ray.d, 0.0, (target - start).length()), 1.0);
+    } else {
+        EdgeEnd unused;
+        Intersection its;
+        if (walk(scene, nullptr, ray, start, medium, &target, T, densities, unused, its, crossings) != WalkEnd::Reached)
+            return false;
+    }
     fillEdge(edge, medium, ray.d, T, densities, startInMedium, endInMedium, mode, crossings);
     edge.length = (target - start).length();
     return !T.isBlack();

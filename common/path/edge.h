@@ -43,7 +43,6 @@ struct PathEdge {
 // Where a traced edge ended.
 struct EdgeEnd {
     enum class Kind { Surface, Medium, Escaped } kind = Kind::Escaped;
-    Intersection its;                // Surface: the surface reached
     Vec3 p;                          // Medium: the interaction point
     const Medium *medium = nullptr;  // medium the end lies in (for a surface: the one the ray arrived through)
     Ray lastRay;                     // Escaped: the ray that left the scene
@@ -53,9 +52,12 @@ struct EdgeEnd {
 // `medium`) through index-matched surfaces. In each medium segment the free-flight distance is sampled
 // with one number from `sampler`, so the edge ends at a medium interaction, at the next surface that is
 // not index-matched, or escapes. Fills the edge as traced by the walk of `mode`; `startInMedium` tells
-// whether the start is a medium vertex (for the reverse density).
+// whether the start is a medium vertex (for the reverse density). The surfaces the walk meets are written
+// to `hit`, which the caller passes cleared: at a Surface end it holds the surface reached, at the others
+// whatever the walk met last. Written in place, a hit is not copied twice on its way into a vertex (issue
+// 17: an Intersection is 304 bytes).
 EdgeEnd traceEdge(const Scene &scene, Sampler &sampler, Ray ray, const Vec3 &start, const Medium *medium,
-                  bool startInMedium, TransportMode mode, PathEdge &edge);
+                  bool startInMedium, TransportMode mode, PathEdge &edge, Intersection &hit);
 
 // Connect's visibility ([TH A4]): the segment from `start` to `target` along `ray` (as spawned by the
 // scene, stopping short of the target), through index-matched surfaces and media, for the walk of

@@ -194,16 +194,17 @@ bool PathVertex::sampleNext(const Scene &scene, Sampler &sampler, TransportMode 
 
 bool PathVertex::perturb(const Scene &scene, Sampler &sampler, TransportMode mode, const Vec3 &d, PathEdge &edge,
                          PathVertex &succ) const {
+    // The walk writes the surface it reaches straight into the new vertex.
+    succ = PathVertex();
     const EdgeEnd end = traceEdge(scene, sampler, spawnRay(scene, d), position(), mediumToward(d),
-                                  type == VertexType::Medium, mode, edge);
+                                  type == VertexType::Medium, mode, edge, succ.its);
     edge.length = kInfinity;
     if (edge.transmittance.isBlack()) return false;
-    succ = PathVertex();
     switch (end.kind) {
         case EdgeEnd::Kind::Surface:
-            succ.its = end.its;
             break;
         case EdgeEnd::Kind::Medium:
+            succ.its = Intersection();  // the walk may have met a surface beyond the interaction
             succ.type = VertexType::Medium;
             succ.its.p = end.p;
             succ.its.wi = -d;
