@@ -11,18 +11,6 @@ namespace {
 
 thread_local uint64_t tlRayCount = 0;
 
-// Secondary rays start off the surface by epsilonAt(p) = 2^-24 (256 max_i |p_i| + 1500) along the
-// geometric normal. The offset has to exceed the error of Embree's single-precision traversal and triangle
-// test (hit points themselves are recomputed in double): a few float ulps of the coordinates involved
-// (pbrt-v3 §3.9's error bounds), for which 256 ulps of |p| leave a wide margin far from the origin. Near
-// the origin |p| says nothing about the size of the triangles around p, whose magnitude sets the error,
-// so a constant term takes over there: Mitsuba 3's math::RayEpsilon (1500 ulps of 1, in scene units),
-// enough for triangles a few hundred units across. Analytic shapes intersect in double and need far less.
-// The price: geometry thinner than the offset (about 1e-4 near the origin, 1.5e-5 |p| far from it) can be
-// leaked through.
-constexpr double kRayEpsilonRelative = 256.0 * 0x1p-24;
-constexpr double kRayEpsilonAbsolute = 1500.0 * 0x1p-24;
-
 template <class Convert>
 void setOriginDirection(const Ray &r, RTCRay &e, Convert convert) {
     e.org_x = convert(r.o.x);
@@ -161,17 +149,6 @@ bool Scene::occluded(const Ray &ray) const {
         rtcOccluded1(rtc_, &ctx, &r);
     }
     return r.tfar < 0;  // Embree marks an occluded ray with tfar = -inf
-}
-
-double Scene::epsilonAt(const Vec3 &p) const {
-    return kRayEpsilonRelative * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) + kRayEpsilonAbsolute;
-}
-
-// The origin moves along the geometric normal to the side the ray leaves to, so that transmitted rays
-// start below the surface and reflected ones above it.
-Ray Scene::spawnRay(const Intersection &its, const Vec3 &d) const {
-    const double eps = epsilonAt(its.p);
-    return Ray(its.p + its.n * (dot(its.n, d) >= 0 ? eps : -eps), d);
 }
 
 // Shadow rays stop short of the target by its own offset (the target usually lies on a surface too) and

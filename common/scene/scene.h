@@ -3,6 +3,8 @@
 #pragma once
 #include <embree3/rtcore.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -110,5 +112,30 @@ private:
 std::unique_ptr<Scene> loadScene(const std::string &path,
                                  const std::vector<std::pair<std::string, std::string>> &defines = {},
                                  bool strict = false);
+
+// Secondary rays start off the surface by epsilonAt(p) = 2^-24 (256 max_i |p_i| + 1500) along the
+// geometric normal. The offset has to exceed the error of Embree's single-precision traversal and triangle
+// test (hit points themselves are recomputed in double): a few float ulps of the coordinates involved
+// (pbrt-v3 §3.9's error bounds), for which 256 ulps of |p| leave a wide margin far from the origin. Near
+// the origin |p| says nothing about the size of the triangles around p, whose magnitude sets the error,
+// so a constant term takes over there: Mitsuba 3's math::RayEpsilon (1500 ulps of 1, in scene units),
+// enough for triangles a few hundred units across. Analytic shapes intersect in double and need far less.
+// The price: geometry thinner than the offset (about 1e-4 near the origin, 1.5e-5 |p| far from it) can be
+// leaked through.
+inline constexpr double kRayEpsilonRelative = 256.0 * 0x1p-24;
+inline constexpr double kRayEpsilonAbsolute = 1500.0 * 0x1p-24;
+
+inline double Scene::epsilonAt(const Vec3 &p) const {
+    return kRayEpsilonRelative * std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) + kRayEpsilonAbsolute;
+}
+
+// The origin moves along the geometric normal to the side the ray leaves to, so that transmitted rays
+// start below the surface and reflected ones above it. Inline so that callers build the ray in place:
+// returned through memory from scene.cpp, its doubles were stored one by one and reloaded in pairs, a
+// store-forwarding stall that held 12% of PathTracer::Li's profile (issue 17).
+inline Ray Scene::spawnRay(const Intersection &its, const Vec3 &d) const {
+    const double eps = epsilonAt(its.p);
+    return Ray(its.p + its.n * (dot(its.n, d) >= 0 ? eps : -eps), d);
+}
 
 }  // namespace pf

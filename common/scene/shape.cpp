@@ -80,9 +80,11 @@ void Shape::sampleDirect(DirectSample &ds, const Vec2 &u) const {
     const double dist2 = d.lengthSquared();
     ds.dist = std::sqrt(dist2);
     ds.d = ds.dist > 0 ? d / ds.dist : Vec3();
-    // Area density to solid angle at ref: p_w = p_A r^2 / |cos theta| (pbrt-v3 §5.5.3).
-    const double cosine = absDot(ds.n, ds.d);
-    ds.pdf = cosine > 0 ? ps.pdf * dist2 / cosine : 0.0;
+    // Area density to solid angle at ref: p_w = p_A r^2 / |cos theta| (pbrt-v3 §5.5.3), with |cos theta| =
+    // |n . (p - ref)| / r: p_A r^3 / |n . (p - ref)|, whose division waits for the square root only, not for
+    // the normalized direction as well.
+    const double projected = absDot(ds.n, d);
+    ds.pdf = projected > 0 ? ps.pdf * dist2 * ds.dist / projected : 0.0;
 }
 
 double Shape::pdfDirect(const DirectSample &ds) const {
