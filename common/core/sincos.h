@@ -15,10 +15,10 @@ struct SinCos {
 };
 
 // sin t and cos t for |t| <= pi/4: their Maclaurin series (Abramowitz and Stegun 4.3.65 and 4.3.66) through
-// t^15 and t^16, in t^2. The first terms left out, t^17/17! and t^18/18!, stay below 5e-17 there, less than half an
+// t^15 and t^16. The first terms left out, t^17/17! and t^18/18!, stay below 5e-17 there, less than half an
 // ulp of either result (|sin t| >= 0.7 |t| and cos t >= 0.7 on that interval).
 inline SinCos sinCosReduced(double t) {
-    // The series' coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!, summed by Horner's rule in t^2.
+    // The series' coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!, of polynomials in t^2.
     constexpr double kSin[] = {1.0,
                                -1.0 / 6.0,
                                1.0 / 120.0,
