@@ -1,34 +1,31 @@
 #include "core/warp.h"
 
-#include <bit>
-#include <cstdint>
-
 #include "core/sincos.h"
 
 namespace pf::warp {
 
 namespace {
 
-// c ? v : w through bit masks. Compilers turn a conditional on doubles into a branch, even written as
-// arithmetic on a 0-or-1 factor.
-double select(bool c, double v, double w) {
-    const uint64_t mask = 0 - static_cast<uint64_t>(c);
-    return std::bit_cast<double>((std::bit_cast<uint64_t>(v) & mask) | (std::bit_cast<uint64_t>(w) & ~mask));
-}
-
 // Shirley and Chiu 1997: the angle is (pi/4) b/a in the octants around the x axis and pi/2 - (pi/4) a/b in
 // those around y, whose cosine and sine are the sine and cosine of (pi/4) a/b. The octant is chosen without
 // a branch: for uniform numbers it is a coin toss that the branch predictor loses half the time.
 // `radius2` is the point's squared distance from the centre, r^2 of the larger coordinate.
 Vec2 concentricDisk(const Vec2 &u, double &radius2) {
+    // Pairs of doubles in vector registers (GCC and Clang vector extensions): the comparison yields an
+    // all-ones or all-zeros mask in each lane, and `?:` on it selects without leaving the register file.
+    using Double2 = double __attribute__((vector_size(16)));
     const double a = 2.0 * u.x - 1.0, b = 2.0 * u.y - 1.0;
-    const bool aroundX = a * a > b * b;
-    const double r = select(aroundX, a, b), other = select(aroundX, b, a);
+    const Double2 aa = {a * a, a * a}, bb = {b * b, b * b};
+    const auto aroundX = aa > bb;
+    const Double2 ab = {a, b}, ba = {b, a};
+    const Double2 chosen = aroundX ? ab : ba;  // (r, the other coordinate)
+    const double r = chosen[0];
     radius2 = r * r;
     if (r == 0) return {0, 0};  // only at the centre, a = b = 0
-    const SinCos phi = sinCosReduced((kPi / 4.0) * (other / r));
-    const double along = r * phi.cos, across = r * phi.sin;
-    return {select(aroundX, along, across), select(aroundX, across, along)};
+    const SinCos phi = sinCosReduced((kPi / 4.0) * (chosen[1] / r));
+    const Double2 alongAcross = {r * phi.cos, r * phi.sin}, acrossAlong = {r * phi.sin, r * phi.cos};
+    const Double2 p = aroundX ? alongAcross : acrossAlong;
+    return {p[0], p[1]};
 }
 
 }  // namespace
