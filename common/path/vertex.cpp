@@ -1,5 +1,8 @@
 #include "path/vertex.h"
 
+#include <memory>
+#include <type_traits>
+
 #include "emitter/emitter.h"
 #include "integrators/visibility.h"
 #include "scene/medium.h"
@@ -194,8 +197,10 @@ bool PathVertex::sampleNext(const Scene &scene, Sampler &sampler, TransportMode 
 
 bool PathVertex::perturb(const Scene &scene, Sampler &sampler, TransportMode mode, const Vec3 &d, PathEdge &edge,
                          PathVertex &succ) const {
-    // The walk writes the surface it reaches straight into the new vertex.
-    succ = PathVertex();
+    // A default vertex built in place (`succ = PathVertex()` cleared a 496-byte temporary and copied it over),
+    // into which the walk writes the surface it reaches.
+    static_assert(std::is_trivially_destructible_v<PathVertex>);
+    std::construct_at(&succ);
     const EdgeEnd end = traceEdge(scene, sampler, spawnRay(scene, d), position(), mediumToward(d),
                                   type == VertexType::Medium, mode, edge, succ.its);
     edge.length = kInfinity;
