@@ -9,8 +9,8 @@ namespace pf {
 
 namespace {
 
-// The BDPT that Psi and the seeding run: every strategy, light tracing included,
-// since a chain's splats land wherever the path meets the film.
+// The BDPT that Psi and the seeding run: every strategy, light tracing included, since a chain's splats land
+// wherever the path meets the film.
 std::unique_ptr<BDPT> makeBDPT(const SourceLocation &loc, int64_t maxDepth, int64_t rrDepth, bool sampleDirect) {
     Properties p(ObjectKind::Integrator, "bdpt", loc);
     p.set("maxDepth", Properties::Type::Integer, maxDepth, loc);
