@@ -359,9 +359,13 @@ double realFarm(const std::string &scene, int res, int spp) {
     const auto integrator = makeIntegrator(*loaded, "", {});
     const ImageTaskResult r = runImageTask(*loaded, dynamic_cast<const SamplingIntegrator &>(*integrator), 1,
                                            ImageTask{0, imageTaskSize(spp, 0, int64_t{res} * res)}, 2);
-    const std::string payload = farm::encodeBlock(r.block);
-    ImageBlock merged = makeFilmBlock(*loaded), decoded = makeFilmBlock(*loaded);
     constexpr int kRepeats = 10;
+    std::string payload;
+    const auto e0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < kRepeats; ++i) payload = farm::encodeBlock(r.block);
+    const double encodeSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - e0).count() / kRepeats;
+    ImageBlock merged = makeFilmBlock(*loaded), decoded = makeFilmBlock(*loaded);
     const auto t0 = std::chrono::steady_clock::now();
     for (int i = 0; i < kRepeats; ++i) {
         farm::decodeBlock(payload, decoded);
@@ -377,6 +381,7 @@ double realFarm(const std::string &scene, int res, int spp) {
                 static_cast<long long>(imageTaskSize(spp, 0, pixels)), static_cast<long long>(largest));
     std::printf("result on the wire:          %8.3f MB per task (%.2f bytes per pixel; raw doubles: 56)\n", bytes / 1e6,
                 bytes / (static_cast<double>(res) * res));
+    std::printf("encode (worker):             %8.2f ms per task (in-process)\n", 1e3 * encodeSeconds);
     std::printf("decode + merge:              %8.2f ms per task (in-process)\n", 1e3 * mergeSeconds);
     std::printf("master CPU:                  %8.2f ms per task (whole process over the job)\n", 1e3 * cpuPerTask);
 

@@ -2,6 +2,7 @@
 // refused; bundles collect what a scene references, refuse entries that leave the bundle, and are only
 // stored when every byte matches the manifest.
 #include <gtest/gtest.h>
+#include <zstd.h>
 
 #include <cmath>
 #include <cstring>
@@ -73,6 +74,105 @@ TEST(FarmWire, CorruptOrMismatchedBlocksAreRefused) {
     ImageBlock infinite(0, 0, 37, 23, &gaussian);
     infinite.sumData()[5] = INFINITY;
     EXPECT_THROW(pf::farm::decodeBlock(pf::farm::encodeBlock(infinite), right), FarmError);
+}
+
+// The compressed body after a block's header, decompressed, changed by `edit` and compressed again (with the
+// content checksum the codec writes, so that only the change itself can make the decoder refuse it).
+std::string withBody(const std::string &data, size_t headerSize, const std::function<void(std::string &)> &edit) {
+    const std::string_view frame = std::string_view(data).substr(headerSize);
+    std::string body(ZSTD_getFrameContentSize(frame.data(), frame.size()), '\0');
+    EXPECT_EQ(ZSTD_decompress(body.data(), body.size(), frame.data(), frame.size()), body.size());
+    edit(body);
+    std::string out = data.substr(0, headerSize);
+    std::string compressed(ZSTD_compressBound(body.size()), '\0');
+    ZSTD_CCtx *cctx = ZSTD_createCCtx();
+    ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+    compressed.resize(ZSTD_compress2(cctx, compressed.data(), compressed.size(), body.data(), body.size()));
+    ZSTD_freeCCtx(cctx);
+    return out + compressed;
+}
+
+// Layout 2 (block_codec.cpp): a mask of the values whose bits are not all zero, then those values. Zeros,
+// negative zeros and values next to them come back bit for bit, in a block whose value count is not a
+// multiple of the mask's eight bits per byte; and the body is smaller than the values it stands for.
+TEST(FarmWire, ZeroValuesAreLeftOutAndComeBackExactly) {
+    const BoxFilter box;
+    ImageBlock sparse(0, 0, 37, 23, &box);
+    const size_t values = sparse.sumData().size() + sparse.weightData().size() + sparse.splatData().size();
+    ASSERT_NE(values % 8, 0u);
+    sparse.sumData()[0] = -0.0;
+    sparse.sumData()[1] = 0x1p-1074;  // the smallest subnormal: one bit set
+    sparse.weightData()[8] = 1.0;
+    sparse.splatData()[sparse.splatData().size() - 1] = -2.5;
+    for (size_t i = 16; i < 24; ++i) sparse.weightData()[i] = static_cast<double>(i);  // a whole mask byte set
+    const std::string data = pf::farm::encodeBlock(sparse);
+    EXPECT_EQ(data.substr(0, 4), "PFB2");
+    ImageBlock decoded(0, 0, 37, 23, &box);
+    decoded.sumData()[2] = 7.0;  // stale values where the data has zeros are overwritten
+    pf::farm::decodeBlock(data, decoded);
+    EXPECT_TRUE(sameStorage(sparse, decoded));
+    EXPECT_TRUE(std::signbit(decoded.sumData()[0]));
+
+    const std::string_view frame = std::string_view(data).substr(40);
+    EXPECT_EQ(ZSTD_getFrameContentSize(frame.data(), frame.size()), (values + 7) / 8 + 12 * sizeof(double));
+}
+
+// A layout-2 body whose mask and values disagree, or whose mask marks values past the block's end, is refused
+// with a FarmError that says so.
+TEST(FarmWire, InconsistentMasksAreRefused) {
+    const GaussianFilter gaussian;
+    const ImageBlock original = randomBlock(gaussian, 5);
+    const size_t values = original.sumData().size() + original.weightData().size() + original.splatData().size();
+    ASSERT_NE(values % 8, 0u);
+    const size_t maskSize = (values + 7) / 8;
+    const std::string data = pf::farm::encodeBlock(original);
+    const auto refused = [&](const std::string &bad, const std::string &message) {
+        ImageBlock block(0, 0, 37, 23, &gaussian);
+        try {
+            pf::farm::decodeBlock(bad, block);
+            ADD_FAILURE() << "accepted; expected: " << message;
+        } catch (const FarmError &e) {
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+        }
+    };
+    refused(withBody(data, 40, [&](std::string &b) { b[maskSize - 1] = static_cast<char>(0xff); }),
+            "mask bits beyond the last value");
+    refused(withBody(data, 40,
+                     [&](std::string &b) {
+                         for (size_t i = 0; i < maskSize; ++i)
+                             if (b[i] != 0) {
+                                 b[i] = static_cast<char>(b[i] & (b[i] - 1));  // one set bit fewer
+                                 return;
+                             }
+                     }),
+            "mask and values disagree");
+    refused(withBody(data, 40, [&](std::string &b) { b.resize(b.size() - 8); }), "mask and values disagree");
+    refused(withBody(data, 40, [&](std::string &b) { b.resize(b.size() - 3); }), "corrupt or truncated data");
+    refused(withBody(data, 40, [&](std::string &b) { b.resize(maskSize - 1); }), "corrupt or truncated data");
+}
+
+// Layout 1, which workers and masters wrote before layout 2 (all values, byte-shuffled), is still read: a master
+// updated in the middle of a job decodes the checkpoints and results written before.
+TEST(FarmWire, LayoutOneBlocksStillDecode) {
+    const GaussianFilter gaussian;
+    const ImageBlock original = randomBlock(gaussian, 6);
+    std::vector<double> all;
+    for (const std::span<const double> a : {original.sumData(), original.weightData(), original.splatData()})
+        all.insert(all.end(), a.begin(), a.end());
+    std::string shuffled(all.size() * sizeof(double), '\0');
+    for (size_t i = 0; i < all.size(); ++i)
+        for (size_t b = 0; b < sizeof(double); ++b)
+            shuffled[b * all.size() + i] = reinterpret_cast<const char *>(&all[i])[b];
+    std::string layoutOne = pf::farm::encodeBlock(original);
+    layoutOne[3] = '1';
+    layoutOne = withBody(layoutOne, 40, [&](std::string &b) { b = shuffled; });
+    ImageBlock decoded(0, 0, 37, 23, &gaussian);
+    pf::farm::decodeBlock(layoutOne, decoded);
+    EXPECT_TRUE(sameStorage(original, decoded));
+
+    std::string unknown = pf::farm::encodeBlock(original);
+    unknown[3] = '3';
+    EXPECT_THROW(pf::farm::decodeBlock(unknown, decoded), FarmError);
 }
 
 // A chain task's film as tiles (image/splat_tiles.h): deposits around one spot, as a burst task's lie

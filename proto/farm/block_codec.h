@@ -1,8 +1,9 @@
 // ImageBlocks on the wire and on disk. A worker's task result and the master's film checkpoints are
 // blocks of doubles that must arrive bit for bit (merging in task order then reproduces the embedded
-// render exactly), so the encoding is lossless: a small header, then the raw arrays byte-shuffled
-// (all first bytes of the doubles, then all second bytes, ...) and compressed with zstd. Shuffling
-// groups the slowly varying sign/exponent bytes, which is what lets zstd shrink doubles at all.
+// render exactly), so the encoding is lossless: a small header, then, compressed with zstd, a mask of the
+// values whose bits are not all zero and those values byte-shuffled (all first bytes of the doubles, then
+// all second bytes, ...). Shuffling groups the slowly varying sign/exponent bytes, which is what lets zstd
+// shrink doubles at all; the mask spares it the zeros, half of a Markov-chain task's film at 1024².
 // A Tiles block (a chain task's film, image/splat_tiles.h) travels as the list of its tiles present and
 // their values alone: a task's result is then the size of what it deposited, not of the crop window.
 #pragma once
