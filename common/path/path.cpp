@@ -204,9 +204,13 @@ bool JoinedPath::connectDirectSensor(const Scene &scene, const Vec2 &u, const Pa
 
 bool JoinedPath::finishConnection(const Scene &scene) {
     const PathVertex &lightEnd = vertex(a_ - 1), &cameraEnd = vertex(a_);
-    const Vec3 toLight = normalize(lightEnd.position() - cameraEnd.position());
-    // Light tracing lands wherever the connection enters the sensor (b = 1: the sensor node is a copy).
-    if (b_ == 1 && !scene.sensor().rasterPosition(cameraEnd.position(), toLight, cameraEnd_.ps.uv)) return false;
+    // Light tracing lands wherever the connection enters the sensor (b = 1: the sensor node is a copy). A sensor
+    // node sampled towards the light end (connectDirectSensor, which has set directSensor_) holds that raster
+    // position already.
+    if (b_ == 1 && directSensor_ < 0 &&
+        !scene.sensor().rasterPosition(cameraEnd.position(), normalize(lightEnd.position() - cameraEnd.position()),
+                                       cameraEnd_.ps.uv))
+        return false;
     const PathVertex &lightPred = vertex(a_ - 2), &cameraPred = vertex(a_ + 1);
     const PathVertex::ConnectionTerms light =
         lightEnd.evalConnection(scene, &lightPred, cameraEnd, TransportMode::Importance);

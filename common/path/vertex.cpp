@@ -116,13 +116,25 @@ bool PathVertex::localDirections(const PathVertex &pred, const PathVertex &succ,
     return dot(toPred, its.n) * wi.z > 0 && dot(toSucc, its.n) * wo.z > 0;
 }
 
-Spectrum PathVertex::endpointProfile(const Scene &scene, const Vec3 &target) const {
+DirectionSample PathVertex::endpointDirection(const Vec3 &target) const {
     DirectionSample ds;
     ds.d = normalize(target - position());
     ds.measure = hasDeltaDirection() ? Measure::Discrete : Measure::SolidAngle;
-    if (type == VertexType::EmitterNode) return emitter->evalDirection(ds, ps);
+    return ds;
+}
+
+Spectrum PathVertex::endpointProfile(const Scene &scene, const Vec3 &target, double *pdf) const {
+    const DirectionSample ds = endpointDirection(target);
+    if (type == VertexType::EmitterNode) {
+        if (pdf) *pdf = emitter->pdfDirection(ds, ps);
+        return emitter->evalDirection(ds, ps);
+    }
     const Sensor &sensor = scene.sensor();
-    return beyondNearClip(sensor, target) ? sensor.evalDirection(ds, ps) : Spectrum(0.0);
+    if (!beyondNearClip(sensor, target)) {
+        if (pdf) *pdf = 0;
+        return Spectrum(0.0);
+    }
+    return pdf ? sensor.evalDirectionAndPdf(ds, ps, *pdf) : sensor.evalDirection(ds, ps);
 }
 
 bool PathVertex::sampleNext(const Scene &scene, Sampler &sampler, TransportMode mode, const PathVertex *pred,
@@ -284,10 +296,7 @@ double PathVertex::directionPdf(const Scene &scene, const PathVertex *pred, cons
     switch (type) {
         case VertexType::EmitterNode:
         case VertexType::SensorNode: {
-            DirectionSample ds;
-            const Vec3 toSucc = succ.position() - position();
-            ds.d = toSucc / std::sqrt(toSucc.lengthSquared());
-            ds.measure = hasDeltaDirection() ? Measure::Discrete : Measure::SolidAngle;
+            const DirectionSample ds = endpointDirection(succ.position());
             if (type == VertexType::EmitterNode) return emitter->pdfDirection(ds, ps);
             return beyondNearClip(scene.sensor(), succ.position()) ? scene.sensor().pdfDirection(ds, ps) : 0.0;
         }
@@ -317,6 +326,12 @@ double PathVertex::areaDensity(double pdfDir, const PathVertex &succ, const Path
 PathVertex::ConnectionTerms PathVertex::evalConnection(const Scene &scene, const PathVertex *pred,
                                                        const PathVertex &succ, TransportMode mode) const {
     ConnectionTerms c;
+    if (isEndpointNode() && pred->isSupernode()) {
+        // eval's profile towards succ and directionPdf's density, from one direction (and one projection onto
+        // the film, for the lens: a light-tracing connection computed it three times, issue 17).
+        c.f = endpointProfile(scene, succ.position(), &c.toSucc);
+        return c;
+    }
     if (type != VertexType::Surface) {
         c.f = eval(scene, pred, succ, mode);
         if (c.f.isBlack()) return c;

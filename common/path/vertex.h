@@ -124,7 +124,10 @@ private:
     // were sampled with (see vertex.cpp). Returns whether both lie on the side where the geometric and the
     // shading normal agree (f is zero otherwise, see above).
     bool localDirections(const PathVertex &pred, const PathVertex &succ, TransportMode mode, Vec3 &wi, Vec3 &wo) const;
-    Spectrum endpointProfile(const Scene &scene, const Vec3 &d) const;
+    // An endpoint node's direction towards `target`, in the measure its profile and density take.
+    DirectionSample endpointDirection(const Vec3 &target) const;
+    // An endpoint node's directional profile towards `target` (see eval), and with `pdf` directionPdf's density.
+    Spectrum endpointProfile(const Scene &scene, const Vec3 &target, double *pdf = nullptr) const;
     Ray spawnRay(const Scene &scene, const Vec3 &d) const;
 };
 

@@ -107,6 +107,7 @@ ProjectiveCamera::ProjectiveCamera(const Properties &props, const LoadContext &c
 void ProjectiveCamera::setThinLens(double apertureRadius, double focusDistance) {
     apertureRadius_ = apertureRadius;
     focusDistance_ = focusDistance;
+    updateProjection();
 }
 
 void ProjectiveCamera::configure(const Scene &) { updateProjection(); }
@@ -134,6 +135,14 @@ void ProjectiveCamera::updateProjection() {
     xFovDeg_ = radToDeg(2.0 * std::atan(tanX_));
     const double cropArea = (2.0 * tanX_ * film_->cropWidth() / width) * (2.0 * tanY_ * film_->cropHeight() / height);
     invImageArea_ = 1.0 / cropArea;
+    // The affine maps between raster positions and the planes z = 1 and z = focusDistance, as products with
+    // constants: every camera ray and every connection to the lens goes through them, and their divisions
+    // were a chain of three in importance() (issue 17).
+    planeScale_ = Vec2(2.0 * tanX_ / width, 2.0 * tanY_ / height);
+    planeOrigin_ = Vec2(tanX_ - planeScale_.x * film_->cropX(), tanY_ - planeScale_.y * film_->cropY());
+    rasterScale_ = Vec2(0.5 * width / (tanX_ * focusDistance_), 0.5 * height / (tanY_ * focusDistance_));
+    rasterOrigin_ = Vec2(0.5 * width - film_->cropX(), 0.5 * height - film_->cropY());
+    aperturePdf_ = deltaAperture() ? 0.0 : 1.0 / (kPi * apertureRadius_ * apertureRadius_);
 }
 
 Vec3 ProjectiveCamera::aperturePoint(const Vec2 &u) const {
@@ -146,22 +155,20 @@ Vec3 ProjectiveCamera::toLocalPoint(const Vec3 &p) const {
     return deltaAperture() ? Vec3(0.0) : worldToLocal_.point(p);
 }
 
+// x = tan(fov_x / 2) (1 - 2 fx / width) for the film position fx = raster.x + cropX, and likewise y.
 Vec3 ProjectiveCamera::rasterToPlane(const Vec2 &raster) const {
-    const double fx = raster.x + film_->cropX(), fy = raster.y + film_->cropY();
-    return {tanX_ * (1.0 - 2.0 * fx / film_->width()), tanY_ * (1.0 - 2.0 * fy / film_->height()), 1.0};
+    return {planeOrigin_.x - planeScale_.x * raster.x, planeOrigin_.y - planeScale_.y * raster.y, 1.0};
 }
 
 double ProjectiveCamera::importance(const Vec3 &a, const Vec3 &d, Vec2 &raster) const {
     if (!(d.z > 0)) return 0.0;
-    // Where the ray meets the plane of focus, which is where raster positions are defined; for the pinhole
-    // any plane would do (a = 0, focus distance 1).
-    const Vec3 q = a + d * ((focusDistance_ - a.z) / d.z);
-    const double px = q.x / focusDistance_, py = q.y / focusDistance_;
-    raster.x = 0.5 * film_->width() * (1.0 - px / tanX_) - film_->cropX();
-    raster.y = 0.5 * film_->height() * (1.0 - py / tanY_) - film_->cropY();
+    // Where the ray meets the plane of focus, which is where raster positions are defined (rasterToPlane's
+    // inverse, scaled by the focus distance); for the pinhole any plane would do (a = 0, focus distance 1).
+    const double invCos = 1.0 / d.z, t = (focusDistance_ - a.z) * invCos;
+    raster.x = rasterOrigin_.x - rasterScale_.x * (a.x + d.x * t);
+    raster.y = rasterOrigin_.y - rasterScale_.y * (a.y + d.y * t);
     if (!(raster.x >= 0 && raster.x <= film_->cropWidth() && raster.y >= 0 && raster.y <= film_->cropHeight()))
         return 0.0;
-    const double invCos = 1.0 / d.z;
     return invImageArea_ * invCos * invCos * invCos;
 }
 
@@ -169,7 +176,8 @@ Spectrum ProjectiveCamera::sampleRay(Ray &ray, const Vec2 &raster, const Vec2 &a
     const Vec3 a = aperturePoint(aperture);
     const Vec3 d = normalize(rasterToPlane(raster) * focusDistance_ - a);
     // The clip planes are planes of constant camera-space depth.
-    ray = Ray(toWorld_.point(a), normalize(toWorld_.vector(d)), nearClip_ / d.z, farClip_ / d.z);
+    const double invZ = 1.0 / d.z;
+    ray = Ray(toWorld_.point(a), normalize(toWorld_.vector(d)), nearClip_ * invZ, farClip_ * invZ);
     return Spectrum(1.0);
 }
 
@@ -203,6 +211,11 @@ Spectrum ProjectiveCamera::sampleDirection(DirectionSample &ds, PositionSample &
 // evalDirection = We * cos = pdfDirection: see projective.h.
 Spectrum ProjectiveCamera::evalDirection(const DirectionSample &ds, const PositionSample &ps) const {
     return Spectrum(pdfDirection(ds, ps));
+}
+
+Spectrum ProjectiveCamera::evalDirectionAndPdf(const DirectionSample &ds, const PositionSample &ps, double &pdf) const {
+    pdf = pdfDirection(ds, ps);
+    return Spectrum(pdf);
 }
 
 double ProjectiveCamera::pdfDirection(const DirectionSample &ds, const PositionSample &ps) const {

@@ -41,6 +41,7 @@ public:
     Spectrum sampleDirection(DirectionSample &ds, PositionSample &ps, const Vec2 &raster) const override;
     Spectrum evalDirection(const DirectionSample &ds, const PositionSample &ps) const override;
     double pdfDirection(const DirectionSample &ds, const PositionSample &ps) const override;
+    Spectrum evalDirectionAndPdf(const DirectionSample &ds, const PositionSample &ps, double &pdf) const override;
     Spectrum sampleDirect(DirectSample &ds, const Vec2 &u) const override;
     double pdfDirect(const DirectSample &ds) const override;
     bool rasterPosition(const Vec3 &p, const Vec3 &d, Vec2 &raster) const override;
@@ -67,12 +68,15 @@ private:
     // We * cos theta for the camera-space ray (a, d), d unit; zero unless it reaches the crop window.
     // Also returns the raster position.
     double importance(const Vec3 &a, const Vec3 &d, Vec2 &raster) const;
-    double aperturePdf() const { return 1.0 / (kPi * apertureRadius_ * apertureRadius_); }
+    double aperturePdf() const { return aperturePdf_; }
 
     double fov_ = 0;  // degrees, along fovAxis_
     FovAxis fovAxis_ = FovAxis::X;
     double xFovDeg_ = 0, tanX_ = 0, tanY_ = 0, invImageArea_ = 0;
     double apertureRadius_ = 0, focusDistance_ = 1;
+    // Derived in updateProjection: rasterToPlane's and importance's affine maps, and the aperture's density.
+    Vec2 planeScale_, planeOrigin_, rasterScale_, rasterOrigin_;
+    double aperturePdf_ = 0;
     Transform worldToLocal_;
     Vec3 forward_;
 };

@@ -33,6 +33,12 @@ public:
     virtual Spectrum evalDirection(const DirectionSample &ds, const PositionSample &ps) const = 0;
     // Solid-angle density of sampleDirection with a uniformly chosen raster position.
     virtual double pdfDirection(const DirectionSample &ds, const PositionSample &ps) const = 0;
+    // evalDirection, with pdfDirection in `pdf`: a BDPT connection to the lens needs both, and a camera can
+    // project the direction once for the two.
+    virtual Spectrum evalDirectionAndPdf(const DirectionSample &ds, const PositionSample &ps, double &pdf) const {
+        pdf = pdfDirection(ds, ps);
+        return evalDirection(ds, ps);
+    }
 
     // Sample the aperture towards ds.ref; returns importance * G / pdf (no visibility test) and sets
     // ds.uv to the raster position. Returns zero if ref projects outside the film or is clipped.
