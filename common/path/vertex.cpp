@@ -21,14 +21,6 @@ bool sidesAgree(const Intersection &its, const Vec3 &wiLocal, const Vec3 &woLoca
     return sameSide(its, wiLocal) && sameSide(its, woLocal);
 }
 
-Vec3 sensorForward(const Sensor &sensor) { return normalize(sensor.toWorld().vector(Vec3(0, 0, 1))); }
-
-// The sensor sees nothing closer than its near clipping plane: camera rays start there (as in
-// Sensor::sampleRay), so connections to the sensor must skip that slab too.
-bool beyondNearClip(const Sensor &sensor, const Vec3 &q) {
-    return dot(q - sensor.toWorld().point(Vec3(0.0)), sensorForward(sensor)) >= sensor.nearClip();
-}
-
 }  // namespace
 
 const PathVertex &PathVertex::emitterSupernode() {
@@ -92,7 +84,7 @@ Ray PathVertex::spawnRay(const Scene &scene, const Vec3 &d) const {
     if (its.shape && (type == VertexType::Surface || type == VertexType::EmitterNode)) return scene.spawnRay(its, d);
     if (type == VertexType::SensorNode) {
         const Sensor &sensor = scene.sensor();
-        const double cosTheta = dot(sensorForward(sensor), d);
+        const double cosTheta = dot(sensor.forward(), d);
         return Ray(its.p, d, cosTheta > 0 ? sensor.nearClip() / cosTheta : kInfinity, kInfinity);
     }
     return Ray(its.p, d);
@@ -130,7 +122,7 @@ Spectrum PathVertex::endpointProfile(const Scene &scene, const Vec3 &target, dou
         return emitter->evalDirection(ds, ps);
     }
     const Sensor &sensor = scene.sensor();
-    if (!beyondNearClip(sensor, target)) {
+    if (!sensor.beyondNearClip(target)) {
         if (pdf) *pdf = 0;
         return Spectrum(0.0);
     }
@@ -298,7 +290,7 @@ double PathVertex::directionPdf(const Scene &scene, const PathVertex *pred, cons
         case VertexType::SensorNode: {
             const DirectionSample ds = endpointDirection(succ.position());
             if (type == VertexType::EmitterNode) return emitter->pdfDirection(ds, ps);
-            return beyondNearClip(scene.sensor(), succ.position()) ? scene.sensor().pdfDirection(ds, ps) : 0.0;
+            return scene.sensor().beyondNearClip(succ.position()) ? scene.sensor().pdfDirection(ds, ps) : 0.0;
         }
         case VertexType::Surface: {
             Vec3 wi, wo;
@@ -374,7 +366,7 @@ bool connect(const Scene &scene, const PathVertex &a, const PathVertex &b, PathE
     Ray ray = onSurface ? scene.spawnRayTo(a.its, target) : scene.spawnRayTo(a.position(), target);
     if (b.type == VertexType::SensorNode) {
         const Sensor &sensor = scene.sensor();
-        const double cosTheta = -dot(sensorForward(sensor), ray.d);
+        const double cosTheta = -dot(sensor.forward(), ray.d);
         if (!(cosTheta > 0)) return false;
         ray.tmax = std::min(ray.tmax, (target - ray.o).length() - sensor.nearClip() / cosTheta);
     }

@@ -56,9 +56,8 @@ double focalLengthToDiagonalFov(const Properties &props) {
 }  // namespace
 
 ProjectiveCamera::ProjectiveCamera(const Properties &props, const LoadContext &ctx) {
-    toWorld_ = rigidTransform(props, "toWorld");
-    worldToLocal_ = toWorld_.inverse();
-    forward_ = normalize(toWorld_.vector(Vec3(0, 0, 1)));
+    setToWorld(rigidTransform(props, "toWorld"));
+    worldToLocal_ = toWorld().inverse();
 
     // A camera inside a participating medium (Mitsuba: an unnamed medium child or ref of <sensor>).
     const auto media = props.children(ObjectKind::Medium);
@@ -177,13 +176,13 @@ Spectrum ProjectiveCamera::sampleRay(Ray &ray, const Vec2 &raster, const Vec2 &a
     const Vec3 d = normalize(rasterToPlane(raster) * focusDistance_ - a);
     // The clip planes are planes of constant camera-space depth.
     const double invZ = 1.0 / d.z;
-    ray = Ray(toWorld_.point(a), normalize(toWorld_.vector(d)), nearClip_ * invZ, farClip_ * invZ);
+    ray = Ray(toWorld().point(a), normalize(toWorld().vector(d)), nearClip_ * invZ, farClip_ * invZ);
     return Spectrum(1.0);
 }
 
 Spectrum ProjectiveCamera::samplePosition(PositionSample &ps, const Vec2 &u) const {
-    ps.p = toWorld_.point(aperturePoint(u));
-    ps.n = forward_;
+    ps.p = toWorld().point(aperturePoint(u));
+    ps.n = forward();
     ps.measure = deltaAperture() ? Measure::Discrete : Measure::Area;
     ps.pdf = pdfPosition(ps);
     return Spectrum(1.0);
@@ -200,7 +199,7 @@ double ProjectiveCamera::pdfPosition(const PositionSample &ps) const {
 Spectrum ProjectiveCamera::sampleDirection(DirectionSample &ds, PositionSample &ps, const Vec2 &raster) const {
     const Vec3 a = toLocalPoint(ps.p);
     const Vec3 d = normalize(rasterToPlane(raster) * focusDistance_ - a);
-    ds.d = normalize(toWorld_.vector(d));
+    ds.d = normalize(toWorld().vector(d));
     ds.measure = Measure::SolidAngle;
     Vec2 unused;
     ds.pdf = importance(a, d, unused);
@@ -235,8 +234,8 @@ Spectrum ProjectiveCamera::sampleDirect(DirectSample &ds, const Vec2 &u) const {
     d = d / dist;
     const double value = importance(a, d, ds.uv);
     if (value == 0) return Spectrum(0.0);
-    ds.p = toWorld_.point(a);
-    ds.n = forward_;
+    ds.p = toWorld().point(a);
+    ds.n = forward();
     ds.dist = dist;
     ds.d = (ds.p - ds.ref) / dist;
     if (deltaAperture()) {
@@ -251,7 +250,7 @@ Spectrum ProjectiveCamera::sampleDirect(DirectSample &ds, const Vec2 &u) const {
 
 double ProjectiveCamera::pdfDirect(const DirectSample &ds) const {
     if (deltaAperture()) return ds.measure == Measure::Discrete ? 1.0 : 0.0;
-    const double cosTheta = -dot(forward_, ds.d);
+    const double cosTheta = -dot(forward(), ds.d);
     if (!(cosTheta > 0)) return 0.0;
     if (ds.measure == Measure::SolidAngle) return aperturePdf() * ds.dist * ds.dist / cosTheta;
     return ds.measure == Measure::Area ? aperturePdf() : 0.0;
@@ -270,8 +269,8 @@ bool ProjectiveCamera::intersectAperture(const Ray &ray, PositionSample &ps, dou
     const Vec3 hit(o.x + d.x * tHit, o.y + d.y * tHit, 0.0);
     if (hit.x * hit.x + hit.y * hit.y > apertureRadius_ * apertureRadius_) return false;
     t = tHit;
-    ps.p = toWorld_.point(hit);
-    ps.n = forward_;
+    ps.p = toWorld().point(hit);
+    ps.n = forward();
     ps.measure = Measure::Area;
     ps.pdf = aperturePdf();
     importance(hit, normalize(-d), ps.uv);

@@ -78,7 +78,6 @@ private:
     Vec2 planeScale_, planeOrigin_, rasterScale_, rasterOrigin_;
     double aperturePdf_ = 0;
     Transform worldToLocal_;
-    Vec3 forward_;
 };
 
 }  // namespace pf

@@ -68,9 +68,26 @@ public:
     const SampleSequence &sampleSequence() const { return sampleSequence_; }
     double nearClip() const { return nearClip_; }
     double farClip() const { return farClip_; }
+    // The unit viewing direction in world space (toWorld's +z).
+    const Vec3 &forward() const { return forward_; }
+    // Whether world point q lies beyond the near clipping plane, a plane of constant depth along forward():
+    // camera rays start there (sampleRay), so connections to the sensor skip that slab too.
+    bool beyondNearClip(const Vec3 &q) const { return dot(q - origin_, forward_) >= nearClip_; }
 
 protected:
+    // Sets toWorld_ and what is derived from it (every connection to the lens asks for the origin and
+    // forward direction, which were a transform and a normalization per call).
+    void setToWorld(const Transform &toWorld) {
+        toWorld_ = toWorld;
+        origin_ = toWorld.point(Vec3(0.0));
+        forward_ = normalize(toWorld.vector(Vec3(0, 0, 1)));
+    }
+
+private:
     Transform toWorld_;
+    Vec3 origin_, forward_{0, 0, 1};
+
+protected:
     std::shared_ptr<Film> film_;
     std::shared_ptr<class Medium> medium_;
     int sampleCount_ = 4;
