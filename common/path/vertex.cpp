@@ -319,8 +319,8 @@ PathVertex::ConnectionTerms PathVertex::evalConnection(const Scene &scene, const
                                                        const PathVertex &succ, TransportMode mode) const {
     ConnectionTerms c;
     if (isEndpointNode() && pred->isSupernode()) {
-        // eval's profile towards succ and directionPdf's density, from one direction (and one projection onto
-        // the film, for the lens: a light-tracing connection computed it three times, issue 17).
+        // eval's profile towards succ and directionPdf's density, from one direction and, for the lens, one
+        // projection onto the film, where the two calls normalized and projected once each (issue 17).
         c.f = endpointProfile(scene, succ.position(), &c.toSucc);
         return c;
     }
