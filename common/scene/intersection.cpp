@@ -5,8 +5,6 @@
 
 namespace pf {
 
-const BSDF *Intersection::bsdf() const { return shape ? shape->bsdf() : nullptr; }
-
 const Emitter *Intersection::emitter() const { return shape ? shape->emitter() : nullptr; }
 
 Spectrum Intersection::Le(const Vec3 &d) const {

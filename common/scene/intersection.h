@@ -35,8 +35,9 @@ struct Intersection {
     Vec3 toWorld(const Vec3 &v) const { return shFrame.toWorld(v); }
     Vec3 toLocal(const Vec3 &v) const { return shFrame.toLocal(v); }
 
-    // Convenience accessors resolved through the shape.
-    const BSDF *bsdf() const;
+    // Convenience accessors resolved through the shape. bsdf() is inline in scene/shape.h: Markov chains ask
+    // for a vertex's BSDF many times per step (issue 17).
+    inline const BSDF *bsdf() const;
     const Emitter *emitter() const;
     bool isEmitter() const { return emitter() != nullptr; }
     // Emitted radiance towards world direction d (zero for non-emitters).

@@ -72,4 +72,6 @@ private:
     std::optional<bool> causticCaster_, causticReceiver_;
 };
 
+inline const BSDF *Intersection::bsdf() const { return shape ? shape->bsdf() : nullptr; }
+
 }  // namespace pf
