@@ -83,16 +83,15 @@ protected:
         forward_ = normalize(toWorld.vector(Vec3(0, 0, 1)));
     }
 
-private:
-    Transform toWorld_;
-    Vec3 origin_, forward_{0, 0, 1};
-
-protected:
     std::shared_ptr<Film> film_;
     std::shared_ptr<class Medium> medium_;
     int sampleCount_ = 4;
     SampleSequence sampleSequence_;
     double nearClip_ = 1e-2, farClip_ = 1e4;
+
+private:
+    Transform toWorld_;  // with origin_ and forward_ derived from it, set only through setToWorld
+    Vec3 origin_, forward_{0, 0, 1};
 };
 
 }  // namespace pf

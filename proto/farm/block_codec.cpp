@@ -212,7 +212,8 @@ void readCompressed(std::string_view compressed, std::span<const std::span<doubl
     // The body, then (layout 2) a window of kept values unshuffled (8-aligned, with a spare slot that the
     // branchless scatter may read): small enough to stay in the first-level cache between unshuffling and
     // scattering, where a whole second copy of the values cost a tenth more decoding time than layout 1.
-    const size_t windowAt = (content + 7) / 8 * 8, need = windowAt + (kWindow + 1) * sizeof(double);
+    const size_t windowAt = (content + 7) / 8 * 8,
+                 need = layout == BodyLayout::NonZeroValues ? windowAt + (kWindow + 1) * sizeof(double) : content;
     if (scratch.size() < need) scratch.resize(need);
     const size_t n = ZSTD_decompress(scratch.data(), content, compressed.data(), compressed.size());
     if (ZSTD_isError(n) || n != content) corrupt(ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short");
