@@ -11,6 +11,30 @@ MutablePath::MutablePath(const PathView &view) {
     edges_.emplace_back();
     for (int i = 0; i + 1 < n; ++i) edges_.push_back(view.edge(i));
     edges_.emplace_back();
+    publish();
+}
+
+MutablePath &MutablePath::operator=(const MutablePath &other) {
+    vertices_ = other.vertices_;
+    edges_ = other.edges_;
+    publish();
+    return *this;
+}
+
+MutablePath &MutablePath::operator=(MutablePath &&other) noexcept {
+    vertices_ = std::move(other.vertices_);
+    edges_ = std::move(other.edges_);
+    publish();
+    other.publish();
+    return *this;
+}
+
+void MutablePath::publish() {
+    // An empty path (length -2) publishes nothing; every path with vertices has the two supernode edges.
+    if (vertices_.empty())
+        PathView::publish(nullptr, nullptr, -2);
+    else
+        PathView::publish(vertices_.data(), edges_.data() + 1, static_cast<int>(vertices_.size()) - 2);
 }
 
 void MutablePath::splice(const MutablePath &x, int l, int m, int added) {
@@ -21,6 +45,7 @@ void MutablePath::splice(const MutablePath &x, int l, int m, int added) {
     edges_.assign(x.edges_.begin(), x.edges_.begin() + (l + 1));
     edges_.resize(edges_.size() + static_cast<size_t>(added + 1));
     edges_.insert(edges_.end(), x.edges_.begin() + (m + 1), x.edges_.begin() + (n + 1));
+    publish();
 }
 
 Spectrum chainContribution(const Scene &scene, const PathView &path) {
@@ -46,22 +71,6 @@ double importanceToCanonical(const Scene &scene, const PathView &path, int i) {
     if (!path.vertex(i).delta) return 1.0;
     const double importance = vertexTerm(scene, path, i, TransportMode::Importance);
     return importance > 0 ? vertexTerm(scene, path, i, TransportMode::Radiance) / importance : 0.0;
-}
-
-bool isNonSpecular(const PathVertex &v) {
-    // isConnectable(), by type: chains classify every vertex many times per step (issue 17).
-    if (v.delta) return false;
-    switch (v.type) {
-        case VertexType::Surface:
-            return (v.its.bsdf()->flags() & BSDFFlags::Smooth) != 0;
-        case VertexType::EmitterNode:
-            return !v.hasDeltaDirection();
-        case VertexType::SensorNode:
-        case VertexType::Medium:
-            return true;
-        default:
-            return false;
-    }
 }
 
 const char *mutationName(MutationType type) {

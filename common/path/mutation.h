@@ -23,6 +23,7 @@
 
 #include "mcmc/metropolis.h"
 #include "path/path.h"
+#include "scene/shape.h"
 
 namespace pf {
 
@@ -30,11 +31,20 @@ namespace pf {
 // and also the two stateless edges to the supernodes, so that a mutation can splice any range.
 class MutablePath final : public PathView {
 public:
-    MutablePath() = default;
+    MutablePath() { publish(); }
     explicit MutablePath(const PathView &view);
-    int length() const override { return static_cast<int>(vertices_.size()) - 2; }
-    const PathVertex &vertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
-    const PathEdge &edge(int i) const override { return edges_[static_cast<size_t>(i + 1)]; }
+    MutablePath(const MutablePath &other) : PathView(other), vertices_(other.vertices_), edges_(other.edges_) {
+        publish();
+    }
+    MutablePath(MutablePath &&other) noexcept
+        : PathView(other), vertices_(std::move(other.vertices_)), edges_(std::move(other.edges_)) {
+        publish();
+        other.publish();
+    }
+    MutablePath &operator=(const MutablePath &other);
+    MutablePath &operator=(MutablePath &&other) noexcept;
+    using PathView::edge;
+    using PathView::vertex;
     // Vertices -1 .. n and edges -1 .. n - 1 (edge i joins vertex i and vertex i + 1).
     PathVertex &vertex(int i) { return vertices_[static_cast<size_t>(i + 1)]; }
     PathEdge &edge(int i) { return edges_[static_cast<size_t>(i + 1)]; }
@@ -45,6 +55,11 @@ public:
     void splice(const MutablePath &x, int l, int m, int added);
 
 private:
+    // Publishes the vectors' storage to PathView; after every change of their size or buffer.
+    void publish();
+    const PathVertex &gatheredVertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
+    const PathEdge &gatheredEdge(int i) const override { return edges_[static_cast<size_t>(i + 1)]; }
+
     std::vector<PathVertex> vertices_;
     std::vector<PathEdge> edges_;
 };
@@ -57,8 +72,22 @@ Spectrum chainContribution(const Scene &scene, const PathView &path);
 double importanceToCanonical(const Scene &scene, const PathView &path, int i);
 
 // Veach's non-specular vertex: one that a connection may end at (PathVertex::isConnectable) and that
-// scatters through a smooth lobe, or the endpoint node it is.
-bool isNonSpecular(const PathVertex &v);
+// scatters through a smooth lobe, or the endpoint node it is. Inline and by type rather than through
+// isConnectable(): chains classify every vertex many times per step (issue 17).
+inline bool isNonSpecular(const PathVertex &v) {
+    if (v.delta) return false;
+    switch (v.type) {
+        case VertexType::Surface:
+            return (v.its.bsdf()->flags() & BSDFFlags::Smooth) != 0;
+        case VertexType::EmitterNode:
+            return !v.hasDeltaDirection();
+        case VertexType::SensorNode:
+        case VertexType::Medium:
+            return true;
+        default:
+            return false;
+    }
+}
 
 // Veach's mutation and perturbation types, manifold exploration's manifold perturbation
 // (path/manifold_perturbation.h), its medium-distance perturbation (path/medium_distance_perturbation.h) and the

@@ -117,6 +117,7 @@ FullPath::FullPath(const PathView &view) {
     const int n = view.length();
     for (int i = -1; i <= n; ++i) vertices_.push_back(view.vertex(i));
     for (int i = 0; i + 1 < n; ++i) edges_.push_back(view.edge(i));
+    publish();
 }
 
 void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int s) {
@@ -124,6 +125,7 @@ void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int 
     camera_ = camera;
     a_ = a;
     b_ = b;
+    publish(nullptr, nullptr, a + b);
     s_ = s;
     ownLightEnd_ = ownCameraEnd_ = false;
     junction_ = PathEdge();

@@ -73,23 +73,72 @@ struct PathDensities {
 };
 
 // A complete path x_0 .. x_{n-1} in light order; vertex(-1) and vertex(n) are the supernodes.
+//
+// Paths that store their vertices and edges contiguously (FullPath, MutablePath) publish them here, so that
+// the path-space code reads them without a virtual call: Markov chains read every vertex many times per step
+// through this interface, and the calls showed at 3% of a chains-only mlt profile (issue 17). A path
+// assembled from two walks (JoinedPath) publishes nothing and answers through gatheredVertex/gatheredEdge.
 class PathView {
 public:
     virtual ~PathView() = default;
-    virtual int length() const = 0;
-    virtual const PathVertex &vertex(int i) const = 0;
+    int length() const { return length_; }
+    const PathVertex &vertex(int i) const {
+        return vertices_ ? vertices_[static_cast<ptrdiff_t>(i) + 1] : gatheredVertex(i);
+    }
     // The edge between vertex(i) and vertex(i + 1), 0 <= i < length() - 1.
-    virtual const PathEdge &edge(int i) const = 0;
+    const PathEdge &edge(int i) const { return edges_ ? edges_[i] : gatheredEdge(i); }
+
+protected:
+    PathView() = default;
+    // A copy keeps the length but publishes no storage: a contiguous path publishes its own copy's (publish()).
+    PathView(const PathView &other) : length_(other.length_) {}
+    PathView &operator=(const PathView &other) {
+        publish(nullptr, nullptr, other.length_);
+        return *this;
+    }
+    // Vertex -1 and edge 0 of contiguous storage (nullptr: ask gatheredVertex/gatheredEdge), and the length.
+    void publish(const PathVertex *vertexMinusOne, const PathEdge *edgeZero, int length) {
+        vertices_ = vertexMinusOne;
+        edges_ = edgeZero;
+        length_ = length;
+    }
+    virtual const PathVertex &gatheredVertex(int i) const = 0;
+    virtual const PathEdge &gatheredEdge(int i) const = 0;
+
+private:
+    const PathVertex *vertices_ = nullptr;
+    const PathEdge *edges_ = nullptr;
+    int length_ = 0;
 };
 
 class FullPath final : public PathView {
 public:
     explicit FullPath(const PathView &view);
-    int length() const override { return static_cast<int>(vertices_.size()) - 2; }
-    const PathVertex &vertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
-    const PathEdge &edge(int i) const override { return edges_[static_cast<size_t>(i)]; }
+    FullPath(const FullPath &other) : PathView(other), vertices_(other.vertices_), edges_(other.edges_) { publish(); }
+    FullPath(FullPath &&other) noexcept
+        : PathView(other), vertices_(std::move(other.vertices_)), edges_(std::move(other.edges_)) {
+        publish();
+        other.publish();
+    }
+    FullPath &operator=(const FullPath &other) {
+        vertices_ = other.vertices_;
+        edges_ = other.edges_;
+        publish();
+        return *this;
+    }
+    FullPath &operator=(FullPath &&other) noexcept {
+        vertices_ = std::move(other.vertices_);
+        edges_ = std::move(other.edges_);
+        publish();
+        other.publish();
+        return *this;
+    }
 
 private:
+    void publish() { PathView::publish(vertices_.data(), edges_.data(), static_cast<int>(vertices_.size()) - 2); }
+    const PathVertex &gatheredVertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
+    const PathEdge &gatheredEdge(int i) const override { return edges_[static_cast<size_t>(i)]; }
+
     std::vector<PathVertex> vertices_;
     std::vector<PathEdge> edges_;
 };
@@ -111,9 +160,8 @@ public:
     // t = 0: the emitter walk crossed the lens.
     bool hitLens(const Scene &scene, const Path &light, const LensHit &hit);
 
-    int length() const override { return a_ + b_; }
     // Inline: the connection and the MIS weights read the path's vertices many times per strategy.
-    const PathVertex &vertex(int i) const override {
+    const PathVertex &vertex(int i) const {
         const int n = length();
         if (i < 0) return PathVertex::emitterSupernode();
         if (i >= n) return PathVertex::sensorSupernode();
@@ -121,7 +169,7 @@ public:
         const int j = n - 1 - i;
         return j == b_ - 1 && ownCameraEnd_ ? cameraEnd_ : camera_->vertex(j);
     }
-    const PathEdge &edge(int i) const override {
+    const PathEdge &edge(int i) const {
         if (i < a_ - 1) return light_->edge(i);
         if (i == a_ - 1) return junction_;
         return camera_->edge(length() - 2 - i);
@@ -139,6 +187,8 @@ public:
     void densities(const Scene &scene, bool sampleDirect, PathDensities &d) const;
 
 private:
+    const PathVertex &gatheredVertex(int i) const override { return vertex(i); }
+    const PathEdge &gatheredEdge(int i) const override { return edge(i); }
     void reset(const Path *light, int a, const Path *camera, int b, int s);
     // Makes walk vertex v the junction's light (or sensor) end. The junction's ends are smooth vertices of
     // the joined path: one that left its walk through a Dirac lobe is copied with that flag cleared, as is
