@@ -141,21 +141,6 @@ bool Transform::isIdentity() const {
     return true;
 }
 
-Vec3 Transform::point(const Vec3 &p) const {
-    const auto &m = m_.m;
-    const double x = m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3];
-    const double y = m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3];
-    const double z = m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3];
-    const double w = m[3][0] * p.x + m[3][1] * p.y + m[3][2] * p.z + m[3][3];
-    return w == 1.0 ? Vec3(x, y, z) : Vec3(x, y, z) / w;
-}
-
-Vec3 Transform::vector(const Vec3 &v) const {
-    const auto &m = m_.m;
-    return {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
-            m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z};
-}
-
 Vec3 Transform::normal(const Vec3 &n) const {
     const auto &i = inv_.m;
     return {i[0][0] * n.x + i[1][0] * n.y + i[2][0] * n.z, i[0][1] * n.x + i[1][1] * n.y + i[2][1] * n.z,

@@ -39,8 +39,21 @@ public:
     const Matrix4 &inverseMatrix() const { return inv_; }
     bool isIdentity() const;
 
-    Vec3 point(const Vec3 &p) const;
-    Vec3 vector(const Vec3 &v) const;
+    // point() and vector() are inline: cameras and instanced shapes call them on every ray and every
+    // connection to the lens (issue 17).
+    Vec3 point(const Vec3 &p) const {
+        const auto &m = m_.m;
+        const double x = m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3];
+        const double y = m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3];
+        const double z = m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3];
+        const double w = m[3][0] * p.x + m[3][1] * p.y + m[3][2] * p.z + m[3][3];
+        return w == 1.0 ? Vec3(x, y, z) : Vec3(x, y, z) / w;
+    }
+    Vec3 vector(const Vec3 &v) const {
+        const auto &m = m_.m;
+        return {m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+                m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z};
+    }
     // Normals transform with the inverse transpose.
     Vec3 normal(const Vec3 &n) const;
     Ray ray(const Ray &r) const { return Ray(point(r.o), vector(r.d), r.tmin, r.tmax); }
