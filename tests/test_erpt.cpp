@@ -27,8 +27,11 @@ class ERPTConvergence : public ::testing::TestWithParam<std::string> {};
 // Mitsuba's perturbations (lens, caustic and multi-chain), every path left to the chains, bursts of 400
 // mutations (short bursts leave more of the noise of picking a few seed paths per pixel).
 TEST_P(ERPTConvergence, AgreesWithBDPT) {
-    expectConvergence(GetParam(), "erpt", {{"directSamples", "-1"}, {"chainLength", "400"}}, ConvergenceSetup{},
-                      GetParam() + " erpt");
+    ConvergenceSetup s;
+    // veach-bidir's glossy highlights: at the default budget of 32 the median block error came to 5.06% with one
+    // draw of seed paths, over the 5% that the comparison needs to mean something; at 48 it is 4.1%.
+    if (GetParam() == "veach-bidir") s.budget = 48;
+    expectConvergence(GetParam(), "erpt", {{"directSamples", "-1"}, {"chainLength", "400"}}, s, GetParam() + " erpt");
 }
 
 // The same with passes of at most 512 mutations: a round of 16 x 16 pixels' bursts (256 x 400 / 32

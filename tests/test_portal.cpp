@@ -294,7 +294,10 @@ TEST_P(PortalConvergence, AgreesWithBDPTAndWithoutPortal) {
     s.seeds = GetParam().renders;
     s.referenceSpp = 128;
     s.maxDepth = GetParam().maxDepth;
-    expectPortalConvergence(GetParam().scene, s, 8192);
+    // The whole image's luminance of an mlt render is its normalization, so its error is the seeding's alone:
+    // with 8192 luminance samples it came to 3.3% of portal-toy's mean with one draw of seed paths, over the 3%
+    // that the comparison needs; with 16384 it came to 2.0%.
+    expectPortalConvergence(GetParam().scene, s, 16384);
 }
 
 // Paths of up to 3 edges; in the box, whose light comes through its small opening, of up to 2 (the light
