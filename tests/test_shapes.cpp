@@ -24,7 +24,7 @@ namespace pf::test {
 namespace {
 
 const SourceLocation kLoc{"test.xml", 1};
-constexpr int kChi2Tests = 9;  // chi-square tests in this file, for the multiple-test correction
+constexpr int kChi2Tests = 11;  // chi-square tests in this file, for the multiple-test correction
 
 Properties shapeProps(const std::string &plugin) { return Properties(ObjectKind::Shape, plugin, kLoc); }
 void setFloat(Properties &p, const std::string &n, double v) { p.set(n, Properties::Type::Float, v, kLoc); }
@@ -610,6 +610,58 @@ TEST(AreaSampling, RectangleGrid) {
             return static_cast<size_t>(j * g + i);
         },
         [&](size_t) { return 4.0 / (g * g); }, "rectangle grid");
+}
+
+// A rectangle samples positions as Mitsuba 0.6 samples its analytic rectangle: u = (x, y) goes to toWorld(2x - 1,
+// 2y - 1, 0), with uv = u (TriangleMesh's parallelogram sampling).
+TEST(AreaSampling, RectangleMapsTheSquareAffinely) {
+    const Transform m = Transform::translate(Vec3(0.3, -2, 1)) * Transform::rotate(Vec3(1, 0, 0), 30.0) *
+                        Transform::scale(Vec3(2.0, 0.5, 1.0));
+    Properties p = shapeProps("rectangle");
+    setTransform(p, "toWorld", m);
+    const auto rect = makeShape(p);
+    for (const Vec2 u : {Vec2(0.1, 0.2), Vec2(0.7, 0.3), Vec2(0.5, 0.5), Vec2(0.0, 0.999), Vec2(0.999, 0.0)}) {
+        PositionSample ps;
+        rect->samplePosition(ps, u);
+        expectVecNear(ps.p, m.point(Vec3(2 * u.x - 1, 2 * u.y - 1, 0)), 1e-12, "p");
+        EXPECT_NEAR(ps.uv.x, u.x, 1e-12);
+        EXPECT_NEAR(ps.uv.y, u.y, 1e-12);
+        EXPECT_NEAR(ps.pdf, 0.25, 1e-12);  // the square's area 4, scaled by 2 * 0.5
+    }
+}
+
+// A quad read from a mesh file, a sheared parallelogram whose triangles share the other diagonal than a
+// rectangle's and are wound the other way: uniform over a grid in its own edge coordinates.
+TEST(AreaSampling, ParallelogramMeshGrid) {
+    MeshData d;
+    const Vec3 P(0.5, 0, 0), e1(2, 0.2, 0.5), e2(0.7, 1.5, -0.3);
+    d.positions = {P, P + e1, P + e1 + e2, P + e2};
+    d.triangles = {{0, 3, 1}, {1, 3, 2}};  // diagonal 1 - 3
+    const auto mesh = makeMesh(d);
+    const int g = 6;
+    const double e11 = dot(e1, e1), e12 = dot(e1, e2), e22 = dot(e2, e2), det = e11 * e22 - e12 * e12;
+    checkUniform(
+        mesh, g * g,
+        [&](const PositionSample &ps) {
+            const Vec3 r = ps.p - P;
+            const double a = (e22 * dot(e1, r) - e12 * dot(e2, r)) / det,
+                         b = (e11 * dot(e2, r) - e12 * dot(e1, r)) / det;
+            EXPECT_NEAR(dot(r - e1 * a - e2 * b, r - e1 * a - e2 * b), 0.0, 1e-20);
+            const int i = std::clamp(static_cast<int>(a * g), 0, g - 1),
+                      j = std::clamp(static_cast<int>(b * g), 0, g - 1);
+            return static_cast<size_t>(j * g + i);
+        },
+        [&](size_t) { return cross(e1, e2).length() / (g * g); }, "parallelogram grid");
+}
+
+// Two triangles that form no parallelogram (a trapezoid, areas 1.5 and 1) are still chosen by area.
+TEST(AreaSampling, TrapezoidTrianglesByArea) {
+    MeshData d;
+    d.positions = {{0, 0, 0}, {3, 0, 0}, {2, 1, 0}, {0, 1, 0}};
+    d.triangles = {{0, 1, 2}, {0, 2, 3}};
+    checkUniform(
+        makeMesh(d), 2, [](const PositionSample &ps) { return static_cast<size_t>(ps.p.y > 0.5 * ps.p.x ? 1 : 0); },
+        [](size_t t) { return t == 0 ? 1.5 : 1.0; }, "trapezoid triangles");
 }
 
 TEST(AreaSampling, DiskRingsAndSectors) {

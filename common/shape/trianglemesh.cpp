@@ -207,6 +207,44 @@ void TriangleMesh::updateSamplingData() {
         for (size_t t = 0; t < triangles_.size(); ++t)
             flatFrames_.push_back(Frame::fromNormalTangent(
                 normals_.empty() ? constants_[t].ng : normalize(normals_[triangles_[t][0]]), constants_[t].dpdu));
+    findParallelogram();
+}
+
+void TriangleMesh::findParallelogram() {
+    parallelogram_.reset();
+    if (triangles_.size() != 2 || !(area_ > 0)) return;
+    const auto &t0 = triangles_[0], &t1 = triangles_[1];
+    const auto inT1 = [&](uint32_t v) { return v == t1[0] || v == t1[1] || v == t1[2]; };
+    // The two corners the triangles share are the diagonal p - r; q is triangle 0's third corner, s triangle 1's.
+    int shared = 0, qAt = -1;
+    for (int k = 0; k < 3; ++k) {
+        if (inT1(t0[k]))
+            ++shared;
+        else
+            qAt = k;
+    }
+    if (shared != 2) return;
+    const uint32_t q = t0[static_cast<size_t>(qAt)];
+    // Triangle 0 in its own winding as q, r, p: r follows q.
+    const uint32_t r = t0[static_cast<size_t>((qAt + 1) % 3)], p = t0[static_cast<size_t>((qAt + 2) % 3)];
+    uint32_t s = t1[0];
+    for (const uint32_t v : t1)
+        if (v != p && v != r) s = v;
+    if (s == p || s == r || s == q) return;
+    // A parallelogram: q + s = p + r, and so the two triangles have the same area. The tolerance is far below
+    // single precision, the ray tracer's: where the corners are off by rounding, the density on each triangle
+    // is 1 / (2 area_t) against the 1 / area that pdfPosition gives, a relative difference of the same order.
+    const Vec3 &P = positions_[p], &Q = positions_[q], &R = positions_[r], &S = positions_[s];
+    const double size = std::max({(Q - P).length(), (S - P).length(), (R - P).length()});
+    if (!((Q + S - P - R).length() <= 1e-12 * size) || !(std::abs(areaDist_.pmf(0) - areaDist_.pmf(1)) <= 1e-12))
+        return;
+    Parallelogram g{};
+    for (int t = 0; t < 2; ++t)
+        for (int k = 1; k <= 2; ++k) {
+            const uint32_t v = triangles_[static_cast<size_t>(t)][static_cast<size_t>(k)];
+            g.role[t][k - 1] = v == p ? 0 : v == r ? 2 : 1;
+        }
+    parallelogram_ = g;
 }
 
 unsigned TriangleMesh::addToEmbree(RTCDevice device, RTCScene scene) const {
@@ -324,10 +362,23 @@ void TriangleMesh::fillIntersection(const Ray &ray, double t, uint32_t primIndex
 }
 
 void TriangleMesh::samplePosition(PositionSample &ps, const Vec2 &u) const {
-    double ux;
-    const size_t prim = areaDist_.sampleDiscrete(u.x, nullptr, &ux);
-    const Vec2 b = warp::squareToUniformTriangle(Vec2(ux, u.y));
-    surfacePoint(static_cast<uint32_t>(prim), b.x, b.y, ps.p, ps.n, ps.uv);  // a position needs no shading frame
+    uint32_t prim;
+    Vec2 b;
+    if (parallelogram_) {
+        // p + x (q - p) + y (s - p) is p (1 - x) + q (x - y) + r y in triangle 0 (x >= y), since s - p = r - q,
+        // and p (1 - y) + s (y - x) + r x in triangle 1: the corners' weights, as barycentrics of each triangle.
+        const bool first = u.x >= u.y;
+        prim = first ? 0 : 1;
+        const double lo = first ? u.y : u.x, hi = first ? u.x : u.y;
+        const double weight[3] = {1.0 - hi, hi - lo, lo};
+        const auto &role = parallelogram_->role[prim];
+        b = Vec2(weight[role[0]], weight[role[1]]);
+    } else {
+        double ux;
+        prim = static_cast<uint32_t>(areaDist_.sampleDiscrete(u.x, nullptr, &ux));
+        b = warp::squareToUniformTriangle(Vec2(ux, u.y));
+    }
+    surfacePoint(prim, b.x, b.y, ps.p, ps.n, ps.uv);  // a position needs no shading frame
     ps.pdf = 1.0 / area_;
     ps.measure = Measure::Area;
     ps.shape = this;

@@ -8,6 +8,7 @@
 // the vertex normals and are differentiated through the normalization; flat triangles have dn = 0.
 #pragma once
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,8 @@ private:
     void rebuildCreases(double maxAngleDeg);
     // Recomputes the area distribution, total area, bounding box and the per-triangle constants below.
     void updateSamplingData();
+    // parallelogram_ for the present positions and triangles.
+    void findParallelogram();
     // (j00 j01; j10 j11) = d(b1, b2)/d(u, v), the inverse Jacobian of triangle prim's texture chart (pbrt-v3
     // §3.6.2); the identity where the barycentric chart stands in.
     struct InverseChart {
@@ -107,6 +110,17 @@ private:
     // normal n (b0 + b1 + b2) normalized is n), so bits may differ in the last place; without vertex
     // normals it is the same expression, bit for bit.
     std::vector<Frame> flatFrames_;
+    // A mesh of two triangles that form a parallelogram (every rectangle shape, a quad from a mesh file) samples
+    // positions with one affine map of the unit square, as Mitsuba 0.6 samples its analytic rectangle, instead
+    // of choosing a triangle by area and warping a square onto it: that choice and the warp's square root were
+    // 5.6% of a `path` profile on cornell-box, whose light is a rectangle (issue 17). Corners p, q, r, s in
+    // order around it, p - r the diagonal that the triangles share, q in triangle 0: u = (x, y) maps to
+    // p + x (q - p) + y (s - p), in triangle 0 where x >= y. role[t][k] is the corner of triangle t's vertex k + 1
+    // (0: p, 1: q or s, 2: r), which picks its barycentrics from the corners' weights.
+    struct Parallelogram {
+        int role[2][2];
+    };
+    std::optional<Parallelogram> parallelogram_;
     Distribution1D areaDist_;
     AABB bbox_;
     double area_ = 0;
