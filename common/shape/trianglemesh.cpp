@@ -198,6 +198,7 @@ void TriangleMesh::updateSamplingData() {
     }
     areaDist_ = Distribution1D(areas);
     area_ = areaDist_.sum();
+    invArea_ = 1.0 / area_;
 
     const bool flat = std::all_of(triangles_.begin(), triangles_.end(), [&](const std::array<uint32_t, 3> &tri) {
         return normals_.empty() || (normals_[tri[0]] == normals_[tri[1]] && normals_[tri[0]] == normals_[tri[2]]);
@@ -242,7 +243,7 @@ void TriangleMesh::findParallelogram() {
     for (int t = 0; t < 2; ++t)
         for (int k = 1; k <= 2; ++k) {
             const uint32_t v = triangles_[static_cast<size_t>(t)][static_cast<size_t>(k)];
-            g.role[t][k - 1] = v == p ? 0 : v == r ? 2 : 1;
+            g.pick[t][k - 1][v == p ? 0 : v == r ? 2 : 1] = 1.0;
         }
     parallelogram_ = g;
 }
@@ -367,19 +368,19 @@ void TriangleMesh::samplePosition(PositionSample &ps, const Vec2 &u) const {
     if (parallelogram_) {
         // p + x (q - p) + y (s - p) is p (1 - x) + q (x - y) + r y in triangle 0 (x >= y), since s - p = r - q,
         // and p (1 - y) + s (y - x) + r x in triangle 1: the corners' weights, as barycentrics of each triangle.
-        const bool first = u.x >= u.y;
-        prim = first ? 0 : 1;
-        const double lo = first ? u.y : u.x, hi = first ? u.x : u.y;
-        const double weight[3] = {1.0 - hi, hi - lo, lo};
-        const auto &role = parallelogram_->role[prim];
-        b = Vec2(weight[role[0]], weight[role[1]]);
+        prim = u.x >= u.y ? 0 : 1;
+        const double lo = std::min(u.x, u.y), hi = std::max(u.x, u.y);
+        const double w0 = 1.0 - hi, w1 = hi - lo, w2 = lo;
+        const auto &pick = parallelogram_->pick[prim];
+        b = Vec2(pick[0][0] * w0 + pick[0][1] * w1 + pick[0][2] * w2,
+                 pick[1][0] * w0 + pick[1][1] * w1 + pick[1][2] * w2);
     } else {
         double ux;
         prim = static_cast<uint32_t>(areaDist_.sampleDiscrete(u.x, nullptr, &ux));
         b = warp::squareToUniformTriangle(Vec2(ux, u.y));
     }
     surfacePoint(prim, b.x, b.y, ps.p, ps.n, ps.uv);  // a position needs no shading frame
-    ps.pdf = 1.0 / area_;
+    ps.pdf = invArea_;
     ps.measure = Measure::Area;
     ps.shape = this;
 }

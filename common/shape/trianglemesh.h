@@ -115,15 +115,18 @@ private:
     // of choosing a triangle by area and warping a square onto it: that choice and the warp's square root were
     // 5.6% of a `path` profile on cornell-box, whose light is a rectangle (issue 17). Corners p, q, r, s in
     // order around it, p - r the diagonal that the triangles share, q in triangle 0: u = (x, y) maps to
-    // p + x (q - p) + y (s - p), in triangle 0 where x >= y. role[t][k] is the corner of triangle t's vertex k + 1
-    // (0: p, 1: q or s, 2: r), which picks its barycentrics from the corners' weights.
+    // p + x (q - p) + y (s - p), in triangle 0 where x >= y. pick[t][k][c] is 1 where corner c (0: p, 1: q or s,
+    // 2: r) is triangle t's vertex k + 1, else 0: its barycentrics are the corners' weights through these factors,
+    // exactly (products with 1 and 0), without a branch on which half the sample fell in, which mispredicted half
+    // the time, or an indexed reload of the weights.
     struct Parallelogram {
-        int role[2][2];
+        double pick[2][2][3];
     };
     std::optional<Parallelogram> parallelogram_;
     Distribution1D areaDist_;
     AABB bbox_;
     double area_ = 0;
+    double invArea_ = 0;  // 1 / area_, every position sample's density
 };
 
 // Reads the mesh file formats into MeshData; each throws SceneError naming `path` (and the line for
