@@ -15,10 +15,13 @@
 # as it is. Prints the count and the measured wall time; compare with
 #   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
 #       --reference REF.exr --image mitsuba=OUT.exr SCENE.xml
+# Same work instead of equal time: with MITSUBA_COUNT=N set, the script renders exactly N samples (or mutations)
+# per pixel, without probes (SECONDS unused), to time beside `pathfarm render SCENE.xml --spp N --threads
+# THREADS`; run both under /usr/bin/time for their CPU seconds.
 set -euo pipefail
 
 if [ $# -lt 6 ]; then
-    sed -n '2,16p' "$0"
+    sed -n '2,20p' "$0"
     exit 2
 fi
 MITSUBA=$1 SCENE=$2 INTEGRATOR=$3 SECONDS_=$4 RES=$5 OUT=$6 THREADS=${7:-$(nproc)}
@@ -58,6 +61,14 @@ timed() {
     end=$(date +%s.%N)
     python3 -c "print($end - $start)"
 }
+
+# Same work (see the top): the given count, no probes.
+if [ -n "${MITSUBA_COUNT:-}" ]; then
+    rewrite "$MITSUBA_COUNT"
+    T=$(timed "$MITSUBA_COUNT" "$OUT")
+    echo "mitsuba $INTEGRATOR: $MITSUBA_COUNT samples per pixel at ${RES}x${RES} in $T s with $THREADS threads -> $OUT"
+    exit 0
+fi
 
 rewrite 1
 T1=$(timed 1 "$WORK/probe1.exr")
