@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "integrators/bdpt.h"
+#include "path/mutation.h"
 #include "support/agreement.h"
 #include "support/render_util.h"
 
@@ -236,7 +237,7 @@ TEST(BDPT, RegeneratesRecordedPaths) {
                 IndependentSampler sampler(kSeed, pixel, index);
                 const Vec2 raster = Vec2(x, y) + sampler.next2D();
                 bdpt.evaluate(*scene, sampler, raster, [&](const StrategySample &original) {
-                    const FullPath path(*original.path);
+                    const MutablePath path(*original.path);
                     const Spectrum f = contribution(*scene, path);
                     const PathRecord record{pixel, index, original.s, original.t};
                     int found = 0;
@@ -245,7 +246,7 @@ TEST(BDPT, RegeneratesRecordedPaths) {
                         EXPECT_EQ(again.value, original.value);
                         EXPECT_EQ(again.raster.x, original.raster.x);
                         EXPECT_EQ(again.raster.y, original.raster.y);
-                        const FullPath regenerated(*again.path);
+                        const MutablePath regenerated(*again.path);
                         ASSERT_EQ(regenerated.length(), path.length());
                         for (int i = 0; i < path.length(); ++i)
                             EXPECT_EQ(regenerated.vertex(i).position(), path.vertex(i).position());

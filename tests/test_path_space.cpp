@@ -10,6 +10,7 @@
 #include "core/warp.h"
 #include "integrators/bdpt.h"
 #include "path/mis.h"
+#include "path/mutation.h"
 #include "scene/medium.h"
 #include "scene/shape.h"
 #include "support/chi2.h"
@@ -414,7 +415,7 @@ void checkRandomPaths(Scene &scene, const std::vector<std::pair<std::string, boo
                               static_cast<double>(pixel / 8) + sampler.next1D());
             bdpt.evaluate(scene, sampler, raster, [&](const StrategySample &x) {
                 ++paths;
-                const FullPath full(*x.path);
+                const MutablePath full(*x.path);
                 const int n = full.length(), s = x.s;
                 // Well formed: emitter node, scattering vertices, sensor node.
                 EXPECT_EQ(full.vertex(0).type, VertexType::EmitterNode);

@@ -113,13 +113,6 @@ int pathDepth(const PathView &path) {
     return depth;
 }
 
-FullPath::FullPath(const PathView &view) {
-    const int n = view.length();
-    for (int i = -1; i <= n; ++i) vertices_.push_back(view.vertex(i));
-    for (int i = 0; i + 1 < n; ++i) edges_.push_back(view.edge(i));
-    publish();
-}
-
 void JoinedPath::reset(const Path *light, int a, const Path *camera, int b, int s) {
     light_ = light;
     camera_ = camera;

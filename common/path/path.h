@@ -3,8 +3,8 @@
 // A subpath is a random walk from one supernode: SAMPLENEXT until the walk ends (it leaves the scene, is
 // absorbed, or Russian roulette stops it). A complete path x_0 .. x_{n-1} (light order) is seen through
 // PathView: JoinedPath assembles one from the first s vertices of an emitter subpath and the first t of
-// a sensor subpath, as the BDPT strategy (s, t) produces it, without copying the subpaths; FullPath
-// holds a copy (for tests, and for Markov chains that mutate paths).
+// a sensor subpath, as the BDPT strategy (s, t) produces it, without copying the subpaths; MutablePath
+// (path/mutation.h) holds a copy (for Markov chains that mutate paths, and for tests).
 //
 // Random numbers: a walk draws from its sampler in vertex order (vertex.h lists the count per vertex),
 // so a subpath is a pure function of the sampler's stream and its first k vertices do not depend on
@@ -74,9 +74,9 @@ struct PathDensities {
 
 // A complete path x_0 .. x_{n-1} in light order; vertex(-1) and vertex(n) are the supernodes.
 //
-// Paths that store their vertices and edges contiguously (FullPath, MutablePath) publish them here, so that
-// the path-space code reads them without a virtual call: Markov chains read every vertex many times per step
-// through this interface, and the calls showed at 3% of a chains-only mlt profile (issue 17). A path
+// A path that stores its vertices and edges contiguously (MutablePath, path/mutation.h) publishes them here, so
+// that the path-space code reads them without a virtual call: Markov chains read every vertex many times per
+// step through this interface, and the calls showed at 3% of a chains-only mlt profile (issue 17). A path
 // assembled from two walks (JoinedPath) publishes nothing and answers through gatheredVertex/gatheredEdge.
 class PathView {
 public:
@@ -109,38 +109,6 @@ private:
     const PathVertex *vertices_ = nullptr;
     const PathEdge *edges_ = nullptr;
     int length_ = 0;
-};
-
-class FullPath final : public PathView {
-public:
-    explicit FullPath(const PathView &view);
-    FullPath(const FullPath &other) : PathView(other), vertices_(other.vertices_), edges_(other.edges_) { publish(); }
-    FullPath(FullPath &&other) noexcept
-        : PathView(other), vertices_(std::move(other.vertices_)), edges_(std::move(other.edges_)) {
-        publish();
-        other.publish();
-    }
-    FullPath &operator=(const FullPath &other) {
-        vertices_ = other.vertices_;
-        edges_ = other.edges_;
-        publish();
-        return *this;
-    }
-    FullPath &operator=(FullPath &&other) noexcept {
-        vertices_ = std::move(other.vertices_);
-        edges_ = std::move(other.edges_);
-        publish();
-        other.publish();
-        return *this;
-    }
-
-private:
-    void publish() { PathView::publish(vertices_.data(), edges_.data(), static_cast<int>(vertices_.size()) - 2); }
-    const PathVertex &gatheredVertex(int i) const override { return vertices_[static_cast<size_t>(i + 1)]; }
-    const PathEdge &gatheredEdge(int i) const override { return edges_[static_cast<size_t>(i)]; }
-
-    std::vector<PathVertex> vertices_;
-    std::vector<PathEdge> edges_;
 };
 
 // The path of one BDPT strategy (ALGORITHMS.md §0): s vertices from the emitter walk, t from the sensor
