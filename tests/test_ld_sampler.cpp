@@ -72,16 +72,18 @@ TEST(OwenSobol, SecondDimensionMatchesItsDirectionNumbers) {
     EXPECT_EQ(sobol::firstDimension(2), 1u << 30);
 }
 
-// The shortcuts the sampler takes equal the definitions: the shuffled point's first coordinate from the
-// reversed index, and its second coordinate from its first.
+// The shortcuts the sampler takes equal the definitions: the shuffled index from the reversed index, the second
+// coordinate's reversal from its table, and both halves of a word reversed at once.
 TEST(OwenSobol, ShuffledPointsFromTheReversedIndex) {
     PCG32 rng(5, 7);
     for (int k = 0; k < 10000; ++k) {
-        const uint32_t index = rng.nextUInt(), seed = rng.nextUInt();
+        const uint32_t index = rng.nextUInt(), seed = rng.nextUInt(), other = rng.nextUInt();
         const uint32_t shuffled = sobol::nestedUniformScramble(index, seed);
-        const uint32_t first = sobol::shuffledFirstDimension(sobol::reverseBits(index), seed);
-        ASSERT_EQ(first, sobol::firstDimension(shuffled));
-        ASSERT_EQ(sobol::reverseBits(sobol::secondFromFirstReversed(first)), sobol::secondDimension(shuffled));
+        ASSERT_EQ(sobol::shuffledIndex(sobol::reverseBits(index), seed), shuffled);
+        ASSERT_EQ(sobol::reversedSecondDimension(shuffled), sobol::reverseBits(sobol::secondDimension(shuffled)));
+        const uint64_t both = sobol::reverseBits64((static_cast<uint64_t>(other) << 32) | index);
+        ASSERT_EQ(both >> 32, sobol::reverseBits(index));
+        ASSERT_EQ(static_cast<uint32_t>(both), sobol::reverseBits(other));
     }
 }
 

@@ -25,6 +25,7 @@ void LowDiscrepancySampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t s
     reversedIndex_ = sobol::reverseBits(static_cast<uint32_t>(sampleIndex));
     requests1D_ = requests2D_ = 0;
     independentStarted_ = false;
+    if (stratified(0)) ahead1D_ = point1D(0), ahead2D_ = point2D(0);
 }
 
 LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::seeds(uint64_t kind, uint32_t request) const {
@@ -35,7 +36,7 @@ LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::seeds(uint64_t kind, 
             b >> 48};
 }
 
-LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::pixelSeeds(uint64_t kind, uint32_t request) const {
+inline LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::pixelSeeds(uint64_t kind, uint32_t request) const {
     const RequestSeeds s = request < kTabulated ? (kind == 1 ? table1D_ : table2D_)[request] : seeds(kind, request);
     return {s.shuffle ^ pixelMask_.shuffle, s.scrambleX ^ pixelMask_.scrambleX, s.scrambleY ^ pixelMask_.scrambleY,
             s.lowBitsX ^ pixelMask_.lowBitsX, s.lowBitsY ^ pixelMask_.lowBitsY};
@@ -57,19 +58,40 @@ double LowDiscrepancySampler::toUnit(uint32_t fraction, uint64_t lowBits) {
 double LowDiscrepancySampler::next1D() {
     const uint32_t request = requests1D_++;
     if (!stratified(request)) return independent().next1D();
+    // Computed ahead, as next2D's points are.
+    const double u = ahead1D_;
+    if (stratified(request + 1)) ahead1D_ = point1D(request + 1);
+    return u;
+}
+
+double LowDiscrepancySampler::point1D(uint32_t request) const {
+    // The shuffled index's first coordinate is reverseBits(index); its Owen scramble reverses it back first.
     const RequestSeeds s = pixelSeeds(1, request);
-    const uint32_t first = sobol::shuffledFirstDimension(reversedIndex_, s.shuffle);
-    return toUnit(sobol::nestedUniformScramble(first, s.scrambleX), s.lowBitsX);
+    const uint32_t index = sobol::shuffledIndex(reversedIndex_, s.shuffle);
+    return toUnit(sobol::reverseBits(sobol::laineKarras(index, s.scrambleX)), s.lowBitsX);
 }
 
 Vec2 LowDiscrepancySampler::next2D() {
     const uint32_t request = requests2D_++;
     if (!stratified(request)) return independent().next2D();
+    // The point was computed ahead, at the previous request (or at start): its hash chains (about 70 cycles of
+    // dependent multiplies, shifts and loads) run while the caller works, not while it waits for the result. The
+    // price is one point per sample computed and never used.
+    const Vec2 p = ahead2D_;
+    if (stratified(request + 1)) ahead2D_ = point2D(request + 1);
+    return p;
+}
+
+Vec2 LowDiscrepancySampler::point2D(uint32_t request) const {
     // One shuffle for both coordinates keeps the pair a (0,2)-sequence; each coordinate has its own scramble.
+    // Both scrambles take their coordinate bit-reversed: the first coordinate's reversal is the shuffled index
+    // itself, the second's comes from its table; one 64-bit reversal then turns both back (x in the high half).
     const RequestSeeds s = pixelSeeds(2, request);
-    const uint32_t first = sobol::shuffledFirstDimension(reversedIndex_, s.shuffle);
-    const uint32_t second = sobol::reverseBits(sobol::laineKarras(sobol::secondFromFirstReversed(first), s.scrambleY));
-    return {toUnit(sobol::nestedUniformScramble(first, s.scrambleX), s.lowBitsX), toUnit(second, s.lowBitsY)};
+    const uint32_t index = sobol::shuffledIndex(reversedIndex_, s.shuffle);
+    const uint64_t xy = sobol::reverseBits64(
+        (static_cast<uint64_t>(sobol::laineKarras(sobol::reversedSecondDimension(index), s.scrambleY)) << 32) |
+        sobol::laineKarras(index, s.scrambleX));
+    return {toUnit(static_cast<uint32_t>(xy >> 32), s.lowBitsX), toUnit(static_cast<uint32_t>(xy), s.lowBitsY)};
 }
 
 std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence) {

@@ -42,6 +42,9 @@ private:
     RequestSeeds seeds(uint64_t kind, uint32_t request) const;
     // The seeds of that request in this pixel: the render's, xor the pixel's mask.
     RequestSeeds pixelSeeds(uint64_t kind, uint32_t request) const;
+    // The numbers of request `request` of each kind in this sample.
+    double point1D(uint32_t request) const;
+    Vec2 point2D(uint32_t request) const;
     // The independent stream of this sample, started on first use.
     IndependentSampler &independent();
     // A 32-bit binary fraction widened to a double in [0, 1) with `lowBits` (16 bits) below it.
@@ -57,6 +60,9 @@ private:
     RequestSeeds pixelMask_{};
     uint32_t reversedIndex_ = 0;
     uint32_t requests1D_ = 0, requests2D_ = 0;
+    // The numbers of requests requests1D_ and requests2D_, computed ahead when those requests are stratified.
+    double ahead1D_ = 0;
+    Vec2 ahead2D_;
     // Requests past `dimension` draw from an independent stream.
     IndependentSampler independent_;
     bool independentStarted_ = false;

@@ -39,19 +39,27 @@ constexpr uint32_t nestedUniformScramble(uint32_t x, uint32_t seed) {
 
 namespace detail {
 // The second Sobol dimension's generator matrix applied to one byte of the index at byte position
-// `shift` / 8: direction numbers v_1 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1) (the Pascal matrix mod 2).
-constexpr std::array<uint32_t, 256> secondDimensionTable(int shift) {
+// `shift` / 8: direction numbers v_1 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1) (the Pascal matrix mod 2). With
+// `reversed`, each image bit-reversed (reversal commutes with xor, so the lookups combine the same way).
+constexpr std::array<uint32_t, 256> secondDimensionTable(int shift, bool reversed) {
     std::array<uint32_t, 256> table{};
     for (uint32_t byte = 0; byte < 256; ++byte) {
         uint32_t v = 1u << 31, r = 0;
         for (int bit = 0; bit < shift + 8; ++bit, v ^= v >> 1)
             if (bit >= shift && ((byte >> (bit - shift)) & 1u)) r ^= v;
-        table[byte] = r;
+        table[byte] = reversed ? reverseBits(r) : r;
     }
     return table;
 }
+template <bool Reversed>
 inline constexpr std::array<std::array<uint32_t, 256>, 4> kSecondDimension = {
-    secondDimensionTable(0), secondDimensionTable(8), secondDimensionTable(16), secondDimensionTable(24)};
+    secondDimensionTable(0, Reversed), secondDimensionTable(8, Reversed), secondDimensionTable(16, Reversed),
+    secondDimensionTable(24, Reversed)};
+template <bool Reversed>
+constexpr uint32_t secondDimension(uint32_t index) {
+    const auto &t = kSecondDimension<Reversed>;
+    return t[0][index & 0xffu] ^ t[1][(index >> 8) & 0xffu] ^ t[2][(index >> 16) & 0xffu] ^ t[3][index >> 24];
+}
 }  // namespace detail
 
 // The index-th point of the first Sobol dimension (van der Corput's radical inverse) as a 32-bit fraction.
@@ -59,34 +67,26 @@ constexpr uint32_t firstDimension(uint32_t index) { return reverseBits(index); }
 
 // The index-th point of the second Sobol dimension: the matrix is linear over GF(2), so the index's bytes
 // are looked up separately and their images combined by xor.
-constexpr uint32_t secondDimension(uint32_t index) {
-    const auto &t = detail::kSecondDimension;
-    return t[0][index & 0xffu] ^ t[1][(index >> 8) & 0xffu] ^ t[2][(index >> 16) & 0xffu] ^ t[3][index >> 24];
+constexpr uint32_t secondDimension(uint32_t index) { return detail::secondDimension<false>(index); }
+
+// The index-th point of the second Sobol dimension, bit-reversed (ready for laineKarras: its Owen scramble is
+// reverseBits(laineKarras(reversedSecondDimension(index), seed))).
+constexpr uint32_t reversedSecondDimension(uint32_t index) { return detail::secondDimension<true>(index); }
+
+// Shuffled indices without reversing the index for every dimension (Burley 2020, §4-5): the shuffle
+// nestedUniformScramble(i, shuffle) is reverseBits(laineKarras(reverseBits(i), shuffle)), and a sample reverses
+// its index once for all of its requests.
+constexpr uint32_t shuffledIndex(uint32_t reversedIndex, uint32_t shuffle) {
+    return reverseBits(laineKarras(reversedIndex, shuffle));
 }
 
-namespace detail {
-// The second dimension as a function of the first (the radical inverse f of the same index), bit-reversed:
-// f -> reverse(secondDimension(reverse(f))), linear over GF(2) as well, tabulated per byte of f.
-constexpr std::array<uint32_t, 256> secondFromFirstTable(int shift) {
-    std::array<uint32_t, 256> table{};
-    for (uint32_t byte = 0; byte < 256; ++byte) table[byte] = reverseBits(secondDimension(reverseBits(byte << shift)));
-    return table;
-}
-inline constexpr std::array<std::array<uint32_t, 256>, 4> kSecondFromFirst = {
-    secondFromFirstTable(0), secondFromFirstTable(8), secondFromFirstTable(16), secondFromFirstTable(24)};
-}  // namespace detail
-
-// Shuffled points without reversing the index for every dimension (Burley 2020, §4-5): with the index
-// shuffled by a nested uniform scramble, s = nestedUniformScramble(i, shuffle), the point's first coordinate
-// is firstDimension(s) = laineKarras(reverseBits(i), shuffle), from the index reversed once.
-constexpr uint32_t shuffledFirstDimension(uint32_t reversedIndex, uint32_t shuffle) {
-    return laineKarras(reversedIndex, shuffle);
-}
-// The second coordinate of the point whose first coordinate is `first`, bit-reversed (ready for laineKarras:
-// its Owen scramble is reverseBits(laineKarras(secondFromFirstReversed(first), seed))).
-constexpr uint32_t secondFromFirstReversed(uint32_t first) {
-    const auto &t = detail::kSecondFromFirst;
-    return t[0][first & 0xffu] ^ t[1][(first >> 8) & 0xffu] ^ t[2][(first >> 16) & 0xffu] ^ t[3][first >> 24];
+// Both 32-bit halves reversed and swapped: reverseBits of each half in one pass, for a 2D point's two
+// coordinates at once.
+constexpr uint64_t reverseBits64(uint64_t x) {
+    x = __builtin_bswap64(x);
+    x = ((x & 0x0f0f0f0f0f0f0f0full) << 4) | ((x & 0xf0f0f0f0f0f0f0f0ull) >> 4);
+    x = ((x & 0x3333333333333333ull) << 2) | ((x & 0xccccccccccccccccull) >> 2);
+    return ((x & 0x5555555555555555ull) << 1) | ((x & 0xaaaaaaaaaaaaaaaaull) >> 1);
 }
 
 }  // namespace pf::sobol
