@@ -212,22 +212,25 @@ Spectrum PathTracer::Li(const Scene &scene, Sampler &sampler, const Ray &primary
             const bool receiver =
                 !passOnly && chainAllowed >= 1 && (bsdf->flags() & BSDFFlags::Smooth) && caustics_->receives(its);
             if (receiver) L += throughput * caustics_->estimate(scene, sampler, its, chainAllowed);
+            DirectSample ds(its.p, its.n);
+            Spectrum value, f;
+            double bsdfPdf = 0;
             if (!passOnly && (bsdf->flags() & BSDFFlags::Smooth)) {
-                DirectSample ds(its.p, its.n);
-                const Spectrum value = scene.sampleEmitterDirect(ds, sampler.next2D());
+                value = scene.sampleEmitterDirect(ds, sampler.next2D());
                 const Vec3 wo = its.toLocal(ds.d);
-                if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0)) {
-                    double bsdfPdf = 0;
-                    const Spectrum f = bsdf->evalPdf(ctx, its, its.wi, wo, bsdfPdf);
-                    L += throughput * directLight(scene, ds, value, f, bsdfPdf, scene.spawnRayTo(its, ds.p),
-                                                  media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_, budget);
-                }
+                if (!value.isBlack() && (!strictNormals_ || dot(ds.d, its.n) * Frame::cosTheta(wo) > 0))
+                    f = bsdf->evalPdf(ctx, its, its.wi, wo, bsdfPdf);
             }
-
+            // The next direction is sampled before the shadow ray is traced (its numbers still follow the
+            // emitter's): the warp's chain of divisions, square roots and polynomials then runs while the
+            // traversal starts, instead of after it while the next ray waits.
             BSDFSample bs;
             const double u1 = sampler.next1D();
             const BSDFContext sampleCtx(TransportMode::Radiance, passOnly ? BSDFFlags::Null : BSDFFlags::All);
             const Spectrum weight = bsdf->sample(sampleCtx, its, its.wi, bs, u1, sampler.next2D());
+            if (!f.isBlack())
+                L += throughput * directLight(scene, ds, value, f, bsdfPdf, scene.spawnRayTo(its, ds.p),
+                                              media_ ? mediumAfter(its, ds.d, medium) : nullptr, media_, budget);
             if (weight.isBlack()) break;
             const Vec3 wo = its.toWorld(bs.wo);
             if (!passOnly && strictNormals_ && dot(wo, its.n) * Frame::cosTheta(bs.wo) <= 0) break;
