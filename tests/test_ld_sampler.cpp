@@ -175,6 +175,51 @@ TEST(LowDiscrepancySampler, SameSampleSameNumbersAndPastTheDimensionIndependentO
     EXPECT_NE(b.next1D(), u);
 }
 
+// A stratified request's numbers depend on (seed, pixel, sample, kind, request) alone: not on how 1D and 2D
+// requests interleave, nor on what the sampler drew before it was restarted. The sampler computes each kind's
+// next request ahead of time, and this is what that must keep: one sampler is restarted on samples of two
+// pixels, each consumed partly in a random interleaving, and every number is checked against a fresh sampler
+// that asks for the same request in a fixed order, and against a `sobol` sampler (every request stratified),
+// whose stratified requests are the same numbers: a request's seeds do not depend on the dimension. Covers
+// `sobol` and a `dimension` of 3, where the computing ahead stops at the last stratified request. (Requests
+// past the dimension share one independent stream in the order they are made, so their numbers do depend on
+// the interleaving.)
+TEST(LowDiscrepancySampler, StratifiedNumbersDependOnlyOnTheirRequest) {
+    for (const int dimension : {0, 3}) {
+        const size_t checked = dimension == 0 ? SIZE_MAX : static_cast<size_t>(dimension);
+        LowDiscrepancySampler reused(dimension);
+        PCG32 rng(11, 3);
+        for (int round = 0; round < 200; ++round) {
+            const uint64_t pixel = 5 + rng.nextUInt(2), sample = rng.nextUInt(40);
+            reused.start(9, pixel, sample);
+            std::vector<double> got1D;
+            std::vector<Vec2> got2D;
+            for (int k = static_cast<int>(rng.nextUInt(12)); k > 0; --k) {
+                if (rng.nextUInt(2))
+                    got1D.push_back(reused.next1D());
+                else
+                    got2D.push_back(reused.next2D());
+            }
+            LowDiscrepancySampler fresh(dimension), sobol;
+            fresh.start(9, pixel, sample);
+            sobol.start(9, pixel, sample);
+            for (size_t r = 0; r < std::min(got1D.size(), checked); ++r) {
+                ASSERT_EQ(fresh.next1D(), got1D[r]) << dimension << " 1D " << r;
+                ASSERT_EQ(sobol.next1D(), got1D[r]) << dimension << " 1D " << r;
+            }
+            fresh.start(9, pixel, sample);
+            sobol.start(9, pixel, sample);
+            for (size_t r = 0; r < std::min(got2D.size(), checked); ++r) {
+                const Vec2 p = fresh.next2D(), q = sobol.next2D();
+                ASSERT_EQ(p.x, got2D[r].x) << dimension << " 2D " << r;
+                ASSERT_EQ(p.y, got2D[r].y) << dimension << " 2D " << r;
+                ASSERT_EQ(q.x, got2D[r].x) << dimension << " 2D " << r;
+                ASSERT_EQ(q.y, got2D[r].y) << dimension << " 2D " << r;
+            }
+        }
+    }
+}
+
 // What the sampler is for. The path tracer on the Cornell box (its file asks for `sobol`) at 16 samples per
 // pixel, against its copy with `independent`, each over eight seeds, both against one reference: the
 // stratified pixel positions, light samples and first bounces lower the mean squared error clearly (the
