@@ -48,16 +48,12 @@ struct Options {
 
 double luminance(const pf::Spectrum &s) { return 0.212671 * s.r + 0.715160 * s.g + 0.072169 * s.b; }
 
-// Per block and channel, the mean of the block's pixels (blocks cut by the border are left out).
-std::vector<pf::Spectrum> blockMeans(const pf::Bitmap &img, int b) {
+// Per block and channel, the mean of the block's pixels (blocks cut by the border are left out), in row order.
+std::vector<pf::Spectrum> blockMeanList(const pf::Bitmap &img, int b) {
+    const pf::Bitmap blocks = pf::blockMeans(img, b);
     std::vector<pf::Spectrum> means;
-    for (int by = 0; by + b <= img.height; by += b)
-        for (int bx = 0; bx + b <= img.width; bx += b) {
-            pf::Spectrum sum(0.0);
-            for (int y = by; y < by + b; ++y)
-                for (int x = bx; x < bx + b; ++x) sum += img.get(x, y);
-            means.push_back(sum / (b * b));
-        }
+    for (int y = 0; y < blocks.height; ++y)
+        for (int x = 0; x < blocks.width; ++x) means.push_back(blocks.get(x, y));
     return means;
 }
 
@@ -148,7 +144,7 @@ int main(int argc, char **argv) {
         "%s at %d x %d, %s, seeds 1..%d, %d threads; reference: %s\n", o.scene.c_str(), o.res, o.res, budget, o.seeds,
         o.threads,
         o.reference.empty() ? ("pathfarm bdpt, " + std::to_string(o.refSpp) + " spp").c_str() : o.reference.c_str());
-    const std::vector<pf::Spectrum> refBlocks = blockMeans(reference, o.block);
+    const std::vector<pf::Spectrum> refBlocks = blockMeanList(reference, o.block);
     // Samples: pixel samples, or mutations for the Markov-chain integrators (their RenderStats::samples).
     std::printf("%-8s %24s %24s %14s %16s %14s\n", "", "relMSE (pixels)",
                 ("relMSE (" + std::to_string(o.block) + "^2 blocks)").c_str(), "samples/px", "samples/s/core",
@@ -169,7 +165,7 @@ int main(int argc, char **argv) {
             samples += static_cast<double>(stats.samples);
             seconds += stats.seconds;
             pixel.push_back(bench::relativeError(image, reference).all);
-            const std::vector<pf::Spectrum> means = blockMeans(image, o.block);
+            const std::vector<pf::Spectrum> means = blockMeanList(image, o.block);
             const std::vector<double> e = blockErrors(means, refBlocks);
             block.push_back(std::accumulate(e.begin(), e.end(), 0.0) / (3.0 * static_cast<double>(e.size())));
             for (size_t i = 0; i < e.size(); ++i) {
@@ -194,7 +190,7 @@ int main(int argc, char **argv) {
                          o.res);
             return 2;
         }
-        const std::vector<pf::Spectrum> means = blockMeans(image, o.block);
+        const std::vector<pf::Spectrum> means = blockMeanList(image, o.block);
         const std::vector<double> e = blockErrors(means, refBlocks);
         if (worstErrors.empty()) {
             worstErrors = e;

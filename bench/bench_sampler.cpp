@@ -1,8 +1,9 @@
 // The pixel samplers' cost: numbers per second on one core for the independent PCG32 streams and the
-// low-discrepancy sampler (core/ld_sampler.h), drawn the way image tasks draw them: `spp` samples of each
-// pixel in a row (a farm task or an `--spp` render: the per-pixel seeds are computed once per pixel), or one
-// sample per pixel and pass (a `--time` render's passes: every sample starts a new pixel), with a path
-// tracer's request pattern per sample (a 2D pixel position, then per bounce a 1D and two 2D requests).
+// low-discrepancy samplers (core/ld_sampler.h, and core/global_sobol_sampler.h on a 4096² film), drawn the way image
+// tasks draw them: `spp` samples of each pixel in a row (a farm task or an `--spp` render: the per-pixel seeds are
+// computed once per pixel), or one sample per pixel and pass (a `--time` render's passes: every sample starts a new
+// pixel), with a path tracer's request pattern per sample (a 2D pixel position, then per bounce a 1D and two 2D
+// requests).
 //
 //   bench_sampler [--spp N] [--bounces B] [--seconds S]
 //
@@ -12,6 +13,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "core/global_sobol_sampler.h"
 #include "core/ld_sampler.h"
 
 namespace {
@@ -67,9 +69,11 @@ int main(int argc, char **argv) {
                 opt.bounces);
     pf::IndependentSampler independent;
     pf::LowDiscrepancySampler sobol, ldsampler(4);
+    pf::GlobalSobolSampler global(4096, 4096);
     for (const auto &[name, sampler] : {std::pair<const char *, pf::PixelSampler *>{"independent", &independent},
                                         {"sobol (every request)", &sobol},
-                                        {"ldsampler (dimension 4)", &ldsampler}}) {
+                                        {"ldsampler (dimension 4)", &ldsampler},
+                                        {"sobol, layout image", &global}}) {
         const auto [tasks, a] = measure(*sampler, opt, false);
         const auto [passes, b] = measure(*sampler, opt, true);
         std::printf("  %-24s %6.1f M/s at %d spp per pixel, %6.1f M/s at one per pass   (checksum %.3g)\n", name,

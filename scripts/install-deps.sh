@@ -18,6 +18,7 @@ BUILD_PACKAGES=(
   libcpp-httplib-dev     # HTTP status endpoint
   libsqlite3-dev         # job store
   libxxhash-dev libzstd-dev                            # content hashes, compressed transfers
+  libboost-dev           # Sobol direction numbers (Joe and Kuo 2008) from Boost.Random's table
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc   # farm RPC
   openssl                # certificates for the farm's TLS test
   libgtest-dev libgmock-dev libbenchmark-dev           # tests and benchmarks

@@ -5,35 +5,15 @@
 // of the path tracer at the same sample count on the Cornell box, whose file asks for `sobol`.
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <set>
-
 #include "core/ld_sampler.h"
 #include "core/owen_sobol.h"
 #include "image/metrics.h"
 #include "support/chi2.h"
+#include "support/nets.h"
 #include "test_mlt_common.h"
 
 namespace pf::test {
 namespace {
-
-// Each of the 2^a x 2^(m-a) elementary intervals, for every a, holds exactly one of the 2^m points.
-bool isNet(const std::vector<Vec2> &points, int m) {
-    for (int a = 0; a <= m; ++a) {
-        std::set<uint64_t> cells;
-        for (const Vec2 &p : points)
-            cells.insert((static_cast<uint64_t>(p.x * std::ldexp(1.0, a)) << 32) |
-                         static_cast<uint64_t>(p.y * std::ldexp(1.0, m - a)));
-        if (cells.size() != points.size()) return false;
-    }
-    return true;
-}
-
-bool isStratified(const std::vector<double> &values) {
-    std::set<uint64_t> cells;
-    for (double v : values) cells.insert(static_cast<uint64_t>(v * static_cast<double>(values.size())));
-    return cells.size() == values.size();
-}
 
 // Samples [first, first + count) of one pixel: request `request` of the 2D (or 1D) requests.
 std::vector<Vec2> points2D(LowDiscrepancySampler &s, uint64_t seed, uint64_t pixel, uint64_t first, uint64_t count,
@@ -231,12 +211,7 @@ TEST(LowDiscrepancySampler, LowersThePathTracersErrorOnTheCornellBox) {
     ASSERT_TRUE(ld->sensor().sampleSequence().lowDiscrepancy);
     ASSERT_FALSE(independent->sensor().sampleSequence().lowDiscrepancy);
     const auto render = [](const Scene &scene, int64_t spp, uint64_t seed) {
-        RenderOptions opt;
-        opt.spp = spp;
-        opt.seed = seed;
-        opt.threads = 2;
-        RenderStats stats;
-        return makeTestIntegrator(scene, "path", {})->render(scene, opt, stats);
+        return renderTestImage(scene, "path", spp, seed);
     };
     const Bitmap reference = render(*ld, 2048, 99);
     double mseLD = 0, mseIndependent = 0;

@@ -407,6 +407,30 @@ TEST(SamplerSettings, TypesChooseTheSequence) {
     }
 }
 
+// `sobol`'s `layout`: "pixel" (the default) keeps the padded sequence, "image" takes one Sobol sequence through the
+// image (core/global_sobol_sampler.h); another value is an error naming the parameter and the file.
+TEST(SamplerSettings, SobolLayoutChoosesTheGlobalSequence) {
+    auto acrossPixels = [](const std::string &layout) {
+        Properties p(ObjectKind::Sampler, "sobol", {"scene.xml", 1});
+        if (!layout.empty()) p.set("layout", Properties::Type::String, layout, {"scene.xml", 2});
+        auto obj =
+            std::dynamic_pointer_cast<SamplerSettings>((*findPlugin(ObjectKind::Sampler, "sobol"))(p, LoadContext{}));
+        p.checkAllUsed();
+        EXPECT_TRUE(obj->sequence().lowDiscrepancy);
+        return obj->sequence().acrossPixels;
+    };
+    EXPECT_FALSE(acrossPixels(""));
+    EXPECT_FALSE(acrossPixels("pixel"));
+    EXPECT_TRUE(acrossPixels("image"));
+    try {
+        acrossPixels("tiles");
+        ADD_FAILURE() << "layout \"tiles\" was accepted";
+    } catch (const SceneError &e) {
+        EXPECT_NE(std::string(e.what()).find("layout"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("scene.xml:2"), std::string::npos) << e.what();
+    }
+}
+
 // Every scene shipped under scenes/ loads (each needs the shape, BSDF, emitter, medium and sensor
 // plugins of the other modules).
 std::vector<std::string> shippedScenes() {

@@ -62,8 +62,9 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
     // same geometry), "<scene>-thinlens" its perspective camera by a thin lens (aperture radius 0.1, focused
     // at 6, for the endpoint position perturbation on the aperture), "<scene>-largelight" (glass-egg) its light 5
     // times as wide, so that BDPT, the reference, finds the light seen through the egg often enough,
-    // "<scene>-independent" its sampler replaced by `independent` and "<scene>-ldsampler" by `ldsampler` with
-    // dimension 3 (pixel samples from core/ld_sampler.h stratified in the first three 1D and 2D requests).
+    // "<scene>-independent" its sampler replaced by `independent`, "<scene>-ldsampler" by `ldsampler` with
+    // dimension 3 (pixel samples from core/ld_sampler.h stratified in the first three 1D and 2D requests) and
+    // "<scene>-imagesobol" by `sobol` with layout "image" (core/global_sobol_sampler.h).
     struct Variant {
         std::string suffix, pattern, replacement;
     };
@@ -76,7 +77,9 @@ inline std::unique_ptr<Scene> loadMLTTestScene(const std::string &name, int res,
          R"(<default name="lightScale" value="0.5"/>)"},
         {"-independent", R"(<sampler type="[a-z]+"\s*>)", R"(<sampler type="independent">)"},
         {"-ldsampler", R"(<sampler type="[a-z]+"\s*>)",
-         R"(<sampler type="ldsampler"><integer name="dimension" value="3"/>)"}};
+         R"(<sampler type="ldsampler"><integer name="dimension" value="3"/>)"},
+        {"-imagesobol", R"(<sampler type="[a-z]+"\s*>)",
+         R"(<sampler type="sobol"><string name="layout" value="image"/>)"}};
     std::string base = name;
     const Variant *variant = nullptr;
     for (const Variant &v : variants)

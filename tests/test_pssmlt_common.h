@@ -68,6 +68,16 @@ inline std::unique_ptr<Integrator> makeTestIntegrator(const Scene &scene, const 
     return createIntegrator(type, props, true);
 }
 
+// `type` (with the scene's maxDepth) rendered at `spp` with `seed` on two threads.
+inline Bitmap renderTestImage(const Scene &scene, const std::string &type, int64_t spp, uint64_t seed) {
+    RenderOptions opt;
+    opt.spp = spp;
+    opt.seed = seed;
+    opt.threads = 2;
+    RenderStats stats;
+    return makeTestIntegrator(scene, type, {})->render(scene, opt, stats);
+}
+
 // Means and standard errors of kxk-pixel block means (per channel), and last of the whole image's
 // luminance, over renders with `seeds` independent seeds.
 struct BlockStats {

@@ -1,5 +1,8 @@
 #include "core/ld_sampler.h"
 
+#include <algorithm>
+
+#include "core/global_sobol_sampler.h"
 #include "core/owen_sobol.h"
 
 namespace pf {
@@ -21,10 +24,9 @@ void LowDiscrepancySampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t s
     }
     // A pixel's sample counts stay far below 2^32 (scene/sampler_settings.cpp bounds them at 2^24 per
     // render); indices are taken modulo 2^32, which only repeats a pixel's points past that.
-    sample_ = sampleIndex;
     reversedIndex_ = sobol::reverseBits(static_cast<uint32_t>(sampleIndex));
     requests1D_ = requests2D_ = 0;
-    independentStarted_ = false;
+    independent_.reset(seed, pixelIndex, sampleIndex);
     if (stratified(0)) ahead1D_ = point1D(0), ahead2D_ = point2D(0);
 }
 
@@ -42,22 +44,9 @@ inline LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::pixelSeeds(uin
             s.lowBitsX ^ pixelMask_.lowBitsX, s.lowBitsY ^ pixelMask_.lowBitsY};
 }
 
-IndependentSampler &LowDiscrepancySampler::independent() {
-    if (!independentStarted_) {
-        independent_.start(seed_, pixel_, sample_);
-        independentStarted_ = true;
-    }
-    return independent_;
-}
-
-double LowDiscrepancySampler::toUnit(uint32_t fraction, uint64_t lowBits) {
-    // Below 2^48, so the signed conversion (one instruction, unlike the unsigned one) is exact.
-    return static_cast<double>(static_cast<int64_t>((static_cast<uint64_t>(fraction) << 16) | lowBits)) * 0x1.0p-48;
-}
-
 double LowDiscrepancySampler::next1D() {
     const uint32_t request = requests1D_++;
-    if (!stratified(request)) return independent().next1D();
+    if (!stratified(request)) return independent_.get().next1D();
     // Computed ahead, as next2D's points are.
     const double u = ahead1D_;
     if (stratified(request + 1)) ahead1D_ = point1D(request + 1);
@@ -68,12 +57,12 @@ double LowDiscrepancySampler::point1D(uint32_t request) const {
     // The shuffled index's first coordinate is reverseBits(index); its Owen scramble reverses it back first.
     const RequestSeeds s = pixelSeeds(1, request);
     const uint32_t index = sobol::shuffledIndex(reversedIndex_, s.shuffle);
-    return toUnit(sobol::reverseBits(sobol::laineKarras(index, s.scrambleX)), s.lowBitsX);
+    return sobol::toUnit(sobol::reverseBits(sobol::laineKarras(index, s.scrambleX)), s.lowBitsX);
 }
 
 Vec2 LowDiscrepancySampler::next2D() {
     const uint32_t request = requests2D_++;
-    if (!stratified(request)) return independent().next2D();
+    if (!stratified(request)) return independent_.get().next2D();
     // The point was computed ahead, at the previous request (or at start): its hash chains (about 70 cycles of
     // dependent multiplies, shifts and loads) run while the caller works, not while it waits for the result. The
     // price is one point per sample computed and never used.
@@ -91,10 +80,14 @@ Vec2 LowDiscrepancySampler::point2D(uint32_t request) const {
     const uint64_t xy = sobol::reverseBits64(
         (static_cast<uint64_t>(sobol::laineKarras(sobol::reversedSecondDimension(index), s.scrambleY)) << 32) |
         sobol::laineKarras(index, s.scrambleX));
-    return {toUnit(static_cast<uint32_t>(xy >> 32), s.lowBitsX), toUnit(static_cast<uint32_t>(xy), s.lowBitsY)};
+    return {sobol::toUnit(static_cast<uint32_t>(xy >> 32), s.lowBitsX),
+            sobol::toUnit(static_cast<uint32_t>(xy), s.lowBitsY)};
 }
 
-std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence) {
+std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence, int filmWidth, int filmHeight) {
+    // Films beyond the global sequence's grid (2^15 pixels a side) take the padded one.
+    if (sequence.acrossPixels && std::max(filmWidth, filmHeight) <= GlobalSobolSampler::kMaxSide)
+        return std::make_unique<GlobalSobolSampler>(filmWidth, filmHeight);
     if (sequence.lowDiscrepancy) return std::make_unique<LowDiscrepancySampler>(sequence.dimension);
     return std::make_unique<IndependentSampler>();
 }

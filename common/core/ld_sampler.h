@@ -45,16 +45,12 @@ private:
     // The numbers of request `request` of each kind in this sample.
     double point1D(uint32_t request) const;
     Vec2 point2D(uint32_t request) const;
-    // The independent stream of this sample, started on first use.
-    IndependentSampler &independent();
-    // A 32-bit binary fraction widened to a double in [0, 1) with `lowBits` (16 bits) below it.
-    static double toUnit(uint32_t fraction, uint64_t lowBits);
     bool stratified(uint32_t request) const { return dimension_ == 0 || request < static_cast<uint32_t>(dimension_); }
 
     // The render's seeds of the first requests of each kind, computed when the seed changes.
     static constexpr uint32_t kTabulated = 32;
     int dimension_;
-    uint64_t seed_ = 0, pixel_ = 0, sample_ = 0, renderSeed_ = 0;
+    uint64_t seed_ = 0, pixel_ = 0, renderSeed_ = 0;
     bool seedKnown_ = false, pixelKnown_ = false;
     std::array<RequestSeeds, kTabulated> table1D_{}, table2D_{};
     RequestSeeds pixelMask_{};
@@ -64,11 +60,11 @@ private:
     double ahead1D_ = 0;
     Vec2 ahead2D_;
     // Requests past `dimension` draw from an independent stream.
-    IndependentSampler independent_;
-    bool independentStarted_ = false;
+    DeferredIndependentSampler independent_;
 };
 
-// A pixel sampler of the given sequence: the independent one or a low-discrepancy one.
-std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence);
+// A pixel sampler of the given sequence for a film of that size: the independent one, the padded low-discrepancy
+// one, or the global Sobol sequence (core/global_sobol_sampler.h).
+std::unique_ptr<PixelSampler> makePixelSampler(const SampleSequence &sequence, int filmWidth, int filmHeight);
 
 }  // namespace pf

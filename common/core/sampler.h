@@ -45,4 +45,25 @@ private:
     PCG32 rng_;
 };
 
+// The independent stream of one pixel sample, started on first use: low-discrepancy samplers draw from it past
+// the requests they stratify, which most samples never reach.
+class DeferredIndependentSampler {
+public:
+    void reset(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) {
+        seed_ = seed, pixel_ = pixelIndex, sample_ = sampleIndex, started_ = false;
+    }
+    IndependentSampler &get() {
+        if (!started_) {
+            stream_.start(seed_, pixel_, sample_);
+            started_ = true;
+        }
+        return stream_;
+    }
+
+private:
+    uint64_t seed_ = 0, pixel_ = 0, sample_ = 0;
+    bool started_ = false;
+    IndependentSampler stream_;
+};
+
 }  // namespace pf

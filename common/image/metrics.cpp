@@ -202,4 +202,17 @@ Bitmap falseColour(const ErrorMap &map, double maxValue) {
     return out;
 }
 
+Bitmap blockMeans(const Bitmap &image, int b) {
+    if (b < 1) throw MetricError("block size " + std::to_string(b) + " must be positive");
+    Bitmap means(image.width / b, image.height / b);
+    for (int by = 0; by < means.height; ++by)
+        for (int bx = 0; bx < means.width; ++bx) {
+            Spectrum sum(0.0);
+            for (int y = by * b; y < (by + 1) * b; ++y)
+                for (int x = bx * b; x < (bx + 1) * b; ++x) sum += image.get(x, y);
+            means.set(bx, by, sum / (b * b));
+        }
+    return means;
+}
+
 }  // namespace pf

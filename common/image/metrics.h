@@ -53,6 +53,10 @@ struct ErrorMetrics {
 // metric of `image` against `reference`.
 ErrorMetrics computeMetrics(const Bitmap &image, const Bitmap &reference, const MetricOptions &options = {});
 
+// The image's means over b x b blocks of pixels, one pixel per block (blocks cut by the right or bottom border are
+// left out): errors of block means measure how well a render gets regions right, which per-pixel errors hide.
+Bitmap blockMeans(const Bitmap &image, int b);
+
 // Efficiency of a render: 1 / (error x seconds), the Monte Carlo efficiency 1 / (variance x time) of
 // Veach's thesis (ch. 2) with a measured error in place of the variance: for an unbiased estimator the
 // (squared) error falls as 1/time, so this is comparable across budgets. Infinite for a

@@ -128,7 +128,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     auto worker = [&]() {
         const uint64_t rays0 = Scene::threadRayCount();
         const std::unique_ptr<PixelSampler> pixelSampler =
-            makePixelSampler(sequence ? *sequence : scene.sensor().sampleSequence());
+            makePixelSampler(sequence ? *sequence : scene.sensor().sampleSequence(), film.width(), film.height());
         PixelSampler &sampler = *pixelSampler;
         for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
             const Tile &t = tiles[i];

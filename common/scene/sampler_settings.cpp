@@ -30,11 +30,22 @@ SampleSequence readDimension(const Properties &props) {
 }
 
 // Mitsuba's "scramble" parameter (halton, hammersley, sobol): -1 selects Mitsuba's default
-// permutation, other values a seed. pathfarm's sequence is scrambled by the render's seed instead, so
+// permutation, other values a seed. pathfarm's sequences are scrambled by the render's seed instead, so
 // the value is read (a non-integer is an error) and has no effect.
 SampleSequence readScramble(const Properties &props) {
     props.getInt("scramble", -1);
     return {true, 0};
+}
+
+// pathfarm's "layout" parameter of `sobol`: "pixel" (the default) gives each pixel its own padded sequence
+// (core/ld_sampler.h), "image" one Sobol sequence through the whole image, as Mitsuba 0.6's `sobol` draws
+// (core/global_sobol_sampler.h, which says what each is better at).
+SampleSequence readSobolLayout(const Properties &props) {
+    SampleSequence sequence = readScramble(props);
+    const std::string layout = props.getString("layout", "pixel");
+    if (layout != "pixel" && layout != "image") props.fail("layout", "must be \"pixel\" or \"image\"");
+    sequence.acrossPixels = layout == "image";
+    return sequence;
 }
 
 std::shared_ptr<Object> makeSettings(int64_t sampleCount, SampleSequence sequence) {
@@ -44,7 +55,8 @@ std::shared_ptr<Object> makeSettings(int64_t sampleCount, SampleSequence sequenc
 }  // namespace
 
 PluginTable samplerPlugins() {
-    // Mitsuba's halton, hammersley and sobol keep their sample count and take the one low-discrepancy sequence.
+    // Mitsuba's halton, hammersley and sobol keep their sample count and take the padded sequence; `sobol` can take
+    // the global one instead (its `layout`).
     const auto scrambledSequence = [](const Properties &props, const LoadContext &) {
         const int64_t n = readSampleCount(props);
         return makeSettings(n, readScramble(props));
@@ -69,7 +81,11 @@ PluginTable samplerPlugins() {
          }},
         {"halton", scrambledSequence},
         {"hammersley", scrambledSequence},
-        {"sobol", scrambledSequence},
+        {"sobol",
+         [](const Properties &props, const LoadContext &) {
+             const int64_t n = readSampleCount(props);
+             return makeSettings(n, readSobolLayout(props));
+         }},
     };
 }
 
