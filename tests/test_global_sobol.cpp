@@ -22,8 +22,8 @@
 namespace pf::test {
 namespace {
 
-// Boost's engine runs through the sequence in Gray-code order from index 1, so its first 2^m - 1 points are the
-// points of indices 1 .. 2^m - 1, in another order.
+// The matrices against Boost's engine, which runs through the sequence in Gray-code order from index 1, so its first
+// 2^m - 1 points are the points of indices 1 .. 2^m - 1, in another order.
 TEST(SobolMatrices, MatchBoostRandomsSobolSequence) {
     constexpr int kPoints = 1 << 10, kDims = sobol::kMatrixDimensions;
     boost::random::sobol_engine<uint32_t, 32> engine(kDims);
@@ -38,6 +38,15 @@ TEST(SobolMatrices, MatchBoostRandomsSobolSequence) {
         ours.insert(std::move(b));
     }
     EXPECT_EQ(boost, ours);
+    // The digit tables the sampler reads give the same products as the columns.
+    PCG32 rng(3, 5);
+    for (int k = 0; k < 20000; ++k) {
+        const uint32_t i = rng.nextUInt();
+        const int d = static_cast<int>(rng.nextUInt(kDims));
+        ASSERT_EQ(sobol::reversedPointByDigits(sobol::reversedDigitTables(d), i),
+                  sobol::reversedPoint(sobol::reversedColumns(d), i))
+            << "dimension " << d << " index " << i;
+    }
     // Dimensions 0 and 1 are the padded sampler's (0,2)-sequence.
     for (uint32_t i : {1u, 2u, 77u, 0xdeadbeefu}) {
         EXPECT_EQ(sobol::reversedPoint(sobol::reversedColumns(0), i), i);
@@ -234,6 +243,22 @@ TEST(GlobalSobolSampler, LowersTheErrorOfBlockMeansOnTheCornellBox) {
         kRes, kSpp, kSeeds, pixelsGlobal, pixelsPadded, pixelsPadded / pixelsGlobal, kBlock, kBlock, blocksGlobal,
         blocksPadded, blocksPadded / blocksGlobal);
     EXPECT_LT(blocksGlobal, 0.85 * blocksPadded);
+}
+
+// Unbiased under a sample budget: `path` and `bdpt` on the Cornell box with layout "image" agree with BDPT on the
+// default (padded) sequence, block by block over 16 independent renders at 16 spp (test_mlt_common.h's thresholds;
+// the same cases under `--time` are in test_time_budget, against a reference of their own layout).
+TEST(GlobalSobolSampler, PathAndBDPTAgreeWithBDPTAtASampleBudget) {
+    const ConvergenceSetup s;
+    const auto global = loadMLTTestScene("cornell-box-imagesobol", s.res, 4);
+    const auto padded = loadMLTTestScene("cornell-box", s.res, 4);
+    const BlockStats &reference = bdptReference("cornell-box", *padded, s.block, s.seeds, s.referenceSpp, 0);
+    for (const std::string type : {"path", "bdpt"}) {
+        const BlockStats image = blockStats(*global, *makeTestIntegrator(*global, type, {}), s.block, s.seeds, 16, 2);
+        const std::string what = "cornell-box, sobol layout image, " + type + " --spp 16";
+        printAgreement(reference, image, what);
+        expectBlocksAgree(reference, image, s.sigmas, s.maxMedianError, s.maxImageError, what);
+    }
 }
 
 }  // namespace

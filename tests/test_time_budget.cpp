@@ -33,7 +33,8 @@ TEST_P(TimeBudget, AgreesWithBDPTAtASampleBudget) {
 }
 
 // cornell-box's file asks for `sobol` (pixel samples stratified in every request, core/ld_sampler.h); its copies
-// with `independent` and with `ldsampler` of dimension 3 (later requests independent) are rendered too.
+// with `independent`, with `ldsampler` of dimension 3 (later requests independent) and with `sobol` of layout
+// "image" (one sequence through the image, core/global_sobol_sampler.h) are rendered too.
 // The Markov chains leave every path to the chains (directSamples = -1), so the stopping rule is all that
 // decides how much of the image each timed render holds. volpath renders the egg filled with a medium under
 // the larger light (test_mlt_common.h's variant): volpath reaches a light behind glass only by hitting it, and
@@ -45,6 +46,7 @@ INSTANTIATE_TEST_SUITE_P(
     Integrators, TimeBudget,
     ::testing::Values(Case{"cornell-box", "path", {}}, Case{"cornell-box", "bdpt", {}},
                       Case{"cornell-box-independent", "path", {}}, Case{"cornell-box-ldsampler", "bdpt", {}},
+                      Case{"cornell-box-imagesobol", "path", {}}, Case{"cornell-box-imagesobol", "bdpt", {}},
                       Case{"glass-egg-largelight", "volpath", {}, 0.5, 512}, Case{"cornell-box", "pssmlt", kChainsOnly},
                       Case{"cornell-box", "mmlt", kChainsOnly}, Case{"cornell-box", "mlt", kChainsOnly},
                       Case{"veach-bidir", "memlt", kChainsOnly}),

@@ -21,7 +21,7 @@ GlobalSobolSampler::GlobalSobolSampler(int filmWidth, int filmHeight)
     : width_(filmWidth),
       log2Side_(0),
       widthReciprocal_(((uint64_t(1) << 47) + static_cast<uint64_t>(filmWidth) - 1) / static_cast<uint64_t>(filmWidth)),
-      columns_(sobol::reversedColumns(0)) {
+      tables_(sobol::reversedDigitTables(0)) {
     const int side = std::max(filmWidth, filmHeight);
     if (filmWidth < 1 || filmHeight < 1 || side > kMaxSide)
         throw std::invalid_argument("the global Sobol sampler needs a film of 1 to " + std::to_string(kMaxSide) +
@@ -100,7 +100,7 @@ void GlobalSobolSampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t samp
 double GlobalSobolSampler::number(uint32_t d) {
     if (d >= static_cast<uint32_t>(sobol::kMatrixDimensions)) return independent_.get().next1D();
     const DimensionSeeds s = d - 2 < kTabulated ? table_[d - 2] : seeds(d);
-    const uint32_t reversed = sobol::reversedPoint(columns_ + 32 * d, index_);
+    const uint32_t reversed = sobol::reversedPointByDigits(tables_ + 128 * d, index_);
     return sobol::toUnit(sobol::reverseBits(sobol::laineKarras(reversed, s.scramble)), s.lowBits);
 }
 
@@ -109,13 +109,9 @@ Vec2 GlobalSobolSampler::pair(uint32_t d) {
         const double a = number(d);
         return {a, number(d + 1)};
     }
-    // Both dimensions in one pass over the index's bits, both fractions turned back by one 64-bit reversal.
-    const uint32_t *cx = columns_ + 32 * d, *cy = cx + 32;
-    uint32_t rx = 0, ry = 0;
-    for (uint32_t i = index_; i != 0; i &= i - 1) {
-        const int b = __builtin_ctz(i);
-        rx ^= cx[b], ry ^= cy[b];
-    }
+    // Both fractions turned back by one 64-bit reversal.
+    const uint32_t rx = sobol::reversedPointByDigits(tables_ + 128 * d, index_);
+    const uint32_t ry = sobol::reversedPointByDigits(tables_ + 128 * (d + 1), index_);
     const DimensionSeeds sx = d - 2 < kTabulated ? table_[d - 2] : seeds(d);
     const DimensionSeeds sy = d - 1 < kTabulated ? table_[d - 1] : seeds(d + 1);
     const uint64_t xy = sobol::reverseBits64((static_cast<uint64_t>(sobol::laineKarras(ry, sy.scramble)) << 32) |

@@ -50,7 +50,7 @@ private:
         uint64_t lowBits;
     };
     DimensionSeeds seeds(uint32_t dimension) const;
-    // The numbers of dimension d, and of dimensions d and d + 1 (one pass over the index's bits for both).
+    // The numbers of dimension d, and of dimensions d and d + 1.
     double number(uint32_t d);
     Vec2 pair(uint32_t d);
 
@@ -61,7 +61,7 @@ private:
     // Film positions: the index's low k bits are the reversed column; the next k solve for the row through the
     // inverse of the second dimension's matrix on those bits (its columns, one per bit of the row's target).
     std::array<uint32_t, 16> rowInverse_{};
-    const uint32_t *columns_;  // sobol::reversedColumns(0)
+    const uint32_t *tables_;  // sobol::reversedDigitTables(0)
     uint64_t seed_ = 0, epoch_ = 0, renderSeed_ = 0;
     bool seedKnown_ = false;
     uint32_t shiftX_ = 0, shiftY_ = 0;                // digital shifts of the film dimensions

@@ -46,11 +46,25 @@ std::vector<uint32_t> buildColumns() {
     return columns;
 }
 
+std::vector<uint32_t> buildDigitTables() {
+    std::vector<uint32_t> tables(static_cast<size_t>(kMatrixDimensions) * 128);
+    for (int d = 0; d < kMatrixDimensions; ++d)
+        for (uint32_t p = 0; p < 8; ++p)
+            for (uint32_t v = 0; v < 16; ++v)
+                tables[static_cast<size_t>(d) * 128 + p * 16 + v] = reversedPoint(reversedColumns(d), v << (4 * p));
+    return tables;
+}
+
 }  // namespace
 
 const uint32_t *reversedColumns(int d) {
     static const std::vector<uint32_t> columns = buildColumns();
     return columns.data() + static_cast<size_t>(d) * 32;
+}
+
+const uint32_t *reversedDigitTables(int d) {
+    static const std::vector<uint32_t> tables = buildDigitTables();
+    return tables.data() + static_cast<size_t>(d) * 128;
 }
 
 }  // namespace pf::sobol
