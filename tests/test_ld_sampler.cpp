@@ -200,6 +200,45 @@ TEST(LowDiscrepancySampler, StratifiedNumbersDependOnlyOnTheirRequest) {
     }
 }
 
+// Sampler::startPart: part 1 begins at request kRequestsPerPart of each kind whatever part 0 consumed (below that),
+// so over a pixel's first 2^m samples, each of which made a random number of requests before it, the first 2D
+// and 1D requests of part 1 are a (0,m,2)-net and stratified, as a fresh sampler's requests at that index are.
+// Without startPart they would be the random requests' successors: not a net. Where part 0 reaches past the
+// part's start, the part begins right after it (no request is made twice in a sample).
+TEST(LowDiscrepancySampler, PartsStartAtFixedRequests) {
+    constexpr int kM = 6;
+    LowDiscrepancySampler s, fresh;
+    PCG32 rng(3, 9);
+    std::vector<Vec2> part1, without;
+    std::vector<double> part1D;
+    for (uint64_t i = 0; i < (uint64_t{1} << kM); ++i) {
+        const int before = static_cast<int>(rng.nextUInt(20));
+        for (const bool jump : {true, false}) {
+            s.start(4, 21, i);
+            for (int k = 0; k < before; ++k) s.next2D(), s.next1D();
+            if (jump) s.startPart(1);
+            (jump ? part1 : without).push_back(s.next2D());
+            if (jump) part1D.push_back(s.next1D());
+        }
+        fresh.start(4, 21, i);
+        fresh.startPart(1);
+        const Vec2 p = fresh.next2D();
+        ASSERT_EQ(p.x, part1.back().x);
+        ASSERT_EQ(p.y, part1.back().y);
+    }
+    EXPECT_TRUE(isNet(part1, kM));
+    EXPECT_TRUE(isStratified(part1D));
+    EXPECT_FALSE(isNet(without, kM));
+    // Part 0 past part 1's start: part 1 continues after it.
+    s.start(4, 21, 0);
+    fresh.start(4, 21, 0);
+    for (uint32_t k = 0; k < LowDiscrepancySampler::kRequestsPerPart + 5; ++k) s.next2D(), fresh.next2D();
+    s.startPart(1);
+    const Vec2 a = s.next2D(), b = fresh.next2D();
+    EXPECT_EQ(a.x, b.x);
+    EXPECT_EQ(a.y, b.y);
+}
+
 // What the sampler is for. The path tracer on the Cornell box (its file asks for `sobol`) at 16 samples per
 // pixel, against its copy with `independent`, each over eight seeds, both against one reference: the
 // stratified pixel positions, light samples and first bounces lower the mean squared error clearly (the

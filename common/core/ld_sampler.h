@@ -30,6 +30,9 @@ public:
     void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) override;
     double next1D() override;
     Vec2 next2D() override;
+    // Part p starts at request p * kRequestsPerPart of each kind.
+    void startPart(uint32_t part) override;
+    static constexpr uint32_t kRequestsPerPart = 64;
 
 private:
     // The hash seeds of one request: the index shuffle, the scrambles of its coordinates and the bits below
@@ -47,12 +50,17 @@ private:
     Vec2 point2D(uint32_t request) const;
     bool stratified(uint32_t request) const { return dimension_ == 0 || request < static_cast<uint32_t>(dimension_); }
 
-    // The render's seeds of the first requests of each kind, computed when the seed changes.
-    static constexpr uint32_t kTabulated = 32;
+    // The render's seeds of the first requests of each kind in each of the first parts, computed when the seed
+    // changes; tableSlot gives a request's place there, or kNotTabulated.
+    static constexpr uint32_t kTabulated = 32, kTabulatedParts = 3, kNotTabulated = UINT32_MAX;
+    static constexpr uint32_t tableSlot(uint32_t request) {
+        const uint32_t part = request / kRequestsPerPart, k = request % kRequestsPerPart;
+        return part < kTabulatedParts && k < kTabulated ? part * kTabulated + k : kNotTabulated;
+    }
     int dimension_;
     uint64_t seed_ = 0, pixel_ = 0, renderSeed_ = 0;
     bool seedKnown_ = false, pixelKnown_ = false;
-    std::array<RequestSeeds, kTabulated> table1D_{}, table2D_{};
+    std::array<RequestSeeds, kTabulated * kTabulatedParts> table1D_{}, table2D_{};
     RequestSeeds pixelMask_{};
     uint32_t reversedIndex_ = 0;
     uint32_t requests1D_ = 0, requests2D_ = 0;

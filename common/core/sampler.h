@@ -12,6 +12,13 @@ class Sampler {
 public:
     virtual ~Sampler() = default;
     virtual double next1D() = 0;
+    // Where the numbers of part `part` of a sample begin (BDPT: 0 the camera walk, 1 the emitter walk, 2 the
+    // direct-sampling numbers). A low-discrepancy sampler starts part p at a fixed request, or right after the
+    // requests made so far where they reach past it, so that a part's k-th request takes the same stratified
+    // dimension in every sample whatever the parts before it consumed (Mitsuba's BDPT alternates its two walks
+    // for the same reason). Requests only move forward, so no number of a sample is drawn twice. Samplers whose
+    // numbers have no such places (independent streams, Markov chains' primary samples) continue in order.
+    virtual void startPart(uint32_t part) { (void)part; }
     // Two numbers used together as one point of the unit square (a pixel position, a direction):
     // low-discrepancy samplers stratify them jointly.
     virtual Vec2 next2D() {

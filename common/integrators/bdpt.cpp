@@ -73,8 +73,13 @@ void BDPT::evaluate(const Scene &scene, Sampler &sampler, const Vec2 &raster, co
     Path &camera = w.camera, &light = w.light;
     JoinedPath &path = w.path;
     std::vector<Vec2> &emitterDirect = w.emitterDirect, &sensorDirect = w.sensorDirect;
+    // Each walk and the direct-sampling numbers start at their own place in a low-discrepancy sampler's
+    // sequence (Sampler::startPart), so that the emitter walk's first vertices and the direct samples stay
+    // stratified across a pixel's samples whatever the camera walk consumed before them.
     camera.sample(scene, sampler, TransportMode::Radiance, maxVertices, rrDepth_, raster);
+    sampler.startPart(1);
     light.sample(scene, sampler, TransportMode::Importance, maxVertices, rrDepth_);
+    sampler.startPart(2);
     emitterDirect.clear();
     sensorDirect.clear();
     if (mis_.sampleDirect) {
