@@ -7,7 +7,9 @@
 // each 2D request and stratified in each 1D request, for every m, and progressively: a time-budgeted render stopped
 // after any count keeps the stratification of its largest power of two. Each single number is still
 // uniform on [0,1), so every estimator stays unbiased; successive samples of a pixel are not independent
-// (negatively correlated by design), which only tests that estimate variance per sample must know.
+// (negatively correlated by design), which only tests that estimate variance per sample must know. An
+// integrator whose later requests would otherwise move with an earlier part's length starts them as a new
+// part (Sampler::startPart; BDPT's emitter walk and direct samples), at a fixed request.
 //
 // Differences from Mitsuba 0.6, whose samplers draw other point sets: pathfarm's sample counts are not
 // known when a timed render starts, and farm tasks split a pixel's samples into ranges, so all five
