@@ -182,6 +182,27 @@ TEST(GlobalSobolSampler, NumbersDependOnlyOnTheirDimension) {
     EXPECT_NE(first(3, 77, 5), first(3, 77, 6));
 }
 
+// Sampler::startPart: part p begins at dimension p * kDimensionsPerPart whatever part 0 consumed below that, so
+// its numbers are those of that dimension (a fresh sampler read one dimension at a time); where part 0 ran past
+// it, the part continues right after (no dimension is drawn twice in a sample).
+TEST(GlobalSobolSampler, PartsStartAtFixedDimensions) {
+    constexpr uint32_t kBase = GlobalSobolSampler::kDimensionsPerPart;
+    PCG32 rng(5, 2);
+    for (int round = 0; round < 100; ++round) {
+        const uint64_t pixel = rng.nextUInt(1200), sample = rng.nextUInt(64);
+        const uint32_t before = 2 + rng.nextUInt(2 * kBase);  // dimensions part 0 takes (one past kBase at most 2x)
+        GlobalSobolSampler s(40, 30), fresh(40, 30);
+        s.start(9, pixel, sample);
+        for (uint32_t d = 0; d < before; ++d) s.next1D();
+        s.startPart(1);
+        const Vec2 p = s.next2D();
+        fresh.start(9, pixel, sample);
+        for (uint32_t d = 0; d < std::max(before, kBase); ++d) fresh.next1D();
+        ASSERT_EQ(p.x, fresh.next1D()) << "part 0 took " << before;
+        ASSERT_EQ(p.y, fresh.next1D()) << "part 0 took " << before;
+    }
+}
+
 // What the sequence is for. One sample per pixel of a smooth integrand of a 2D request, averaged over an 8 x 8
 // block of pixels: the global sequence stratifies the block's 64 points together (with their film positions), the
 // padded one (each pixel's own sequence) leaves them independent. Over 400 seeds the block mean's squared error

@@ -120,6 +120,13 @@ Vec2 GlobalSobolSampler::pair(uint32_t d) {
             sobol::toUnit(static_cast<uint32_t>(xy), sy.lowBits)};
 }
 
+void GlobalSobolSampler::startPart(uint32_t part) {
+    const uint32_t base = part * kDimensionsPerPart;
+    if (dimension_ >= base) return;
+    dimension_ = base;
+    ahead_ = pair(base);
+}
+
 double GlobalSobolSampler::next1D() {
     // ahead_ holds dimensions d and d + 1: the first is this request's, the second stays ahead with d + 2 beside it.
     const uint32_t d = dimension_++;

@@ -18,7 +18,8 @@
 // take a random digital shift (which moves the grid's pixels among themselves and each point uniformly within
 // its pixel), every later dimension its own Owen scramble (Burley 2020's hash, core/owen_sobol.h), and every
 // number 16 random bits below its 32. Requests take dimensions in the order they are made (a 2D request two of
-// them); past kMatrixDimensions they draw from the sample's independent stream. Indices are 32-bit: once a
+// them), a new part of the sample (Sampler::startPart) from a fixed dimension on; past kMatrixDimensions they
+// draw from the sample's independent stream. Indices are 32-bit: once a
 // pixel's samples pass 2^(32-2k), the sequence starts again under new random shifts and scrambles (an epoch),
 // which keeps each epoch a randomized Sobol sequence of its own.
 #pragma once
@@ -38,6 +39,9 @@ public:
     void start(uint64_t seed, uint64_t pixelIndex, uint64_t sampleIndex) override;
     double next1D() override;
     Vec2 next2D() override;
+    // Part p starts at dimension p * kDimensionsPerPart (Sampler::startPart).
+    void startPart(uint32_t part) override;
+    static constexpr uint32_t kDimensionsPerPart = 32;
 
     // The sequence's index of this sample (for tests): which point of which block it takes.
     uint32_t index() const { return index_; }
