@@ -58,7 +58,8 @@ private:
     double number(uint32_t d);
     Vec2 pair(uint32_t d);
 
-    static constexpr uint32_t kTabulated = 64;
+    // Seeds tabulated for dimensions 2 .. kTabulated + 1: the first dimensions of BDPT's three parts and more.
+    static constexpr uint32_t kTabulated = 128;
     int width_, log2Side_;
     // pixelIndex / width_ as a multiplication: (pixelIndex * widthReciprocal_) >> 47 (exact below 2^32 pixels).
     uint64_t widthReciprocal_;

@@ -14,11 +14,7 @@ void LowDiscrepancySampler::start(uint64_t seed, uint64_t pixelIndex, uint64_t s
     if (!seedKnown_ || seed != seed_) {
         seed_ = seed, seedKnown_ = true, pixelKnown_ = false;
         renderSeed_ = hashCombine(seed, 0x4c44u /* "LD" */);
-        for (uint32_t part = 0; part < kTabulatedParts; ++part)
-            for (uint32_t k = 0; k < kTabulated; ++k) {
-                const uint32_t r = part * kRequestsPerPart + k;
-                table1D_[tableSlot(r)] = seeds(1, r), table2D_[tableSlot(r)] = seeds(2, r);
-            }
+        for (uint32_t r = 0; r < kTabulated; ++r) table1D_[r] = seeds(1, r), table2D_[r] = seeds(2, r);
     }
     if (!pixelKnown_ || pixelIndex != pixel_) {
         pixel_ = pixelIndex, pixelKnown_ = true;
@@ -43,8 +39,7 @@ LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::seeds(uint64_t kind, 
 }
 
 inline LowDiscrepancySampler::RequestSeeds LowDiscrepancySampler::pixelSeeds(uint64_t kind, uint32_t request) const {
-    const uint32_t slot = tableSlot(request);
-    const RequestSeeds s = slot != kNotTabulated ? (kind == 1 ? table1D_ : table2D_)[slot] : seeds(kind, request);
+    const RequestSeeds s = request < kTabulated ? (kind == 1 ? table1D_ : table2D_)[request] : seeds(kind, request);
     return {s.shuffle ^ pixelMask_.shuffle, s.scrambleX ^ pixelMask_.scrambleX, s.scrambleY ^ pixelMask_.scrambleY,
             s.lowBitsX ^ pixelMask_.lowBitsX, s.lowBitsY ^ pixelMask_.lowBitsY};
 }
