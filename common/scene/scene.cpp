@@ -10,6 +10,7 @@ namespace pf {
 namespace {
 
 thread_local uint64_t tlRayCount = 0;
+thread_local std::vector<Scene::TracedRay> *tlRayLog = nullptr;
 
 template <class Convert>
 void setOriginDirection(const Ray &r, RTCRay &e, Convert convert) {
@@ -120,18 +121,45 @@ void Scene::finalize() {
     emitterDist_ = Distribution1D(weights);
 }
 
-bool Scene::intersect(const Ray &ray, Intersection &its) const {
-    ++tlRayCount;
+namespace {
+
+void embreeIntersect(RTCScene scene, const Ray &ray, RTCRayHit &rh) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
     toEmbree(ray, rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    {
-        const ScopedQueryRay exact(ray);
-        rtcIntersect1(rtc_, &ctx, &rh);
-    }
+    const ScopedQueryRay exact(ray);
+    rtcIntersect1(scene, &ctx, &rh);
+}
+
+// Embree marks an occluded ray with tfar = -inf.
+bool embreeOccluded(RTCScene scene, const Ray &ray) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRay r;
+    toEmbree(ray, r);
+    const ScopedQueryRay exact(ray);
+    rtcOccluded1(scene, &ctx, &r);
+    return r.tfar < 0;
+}
+
+}  // namespace
+
+void Scene::recordThreadRays(std::vector<TracedRay> *log) { tlRayLog = log; }
+
+bool Scene::traverse(const TracedRay &r) const {
+    if (r.shadow) return embreeOccluded(rtc_, r.ray);
+    RTCRayHit rh;
+    embreeIntersect(rtc_, r.ray, rh);
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+}
+
+bool Scene::intersect(const Ray &ray, Intersection &its) const {
+    ++tlRayCount;
+    if (tlRayLog) tlRayLog->push_back({ray, false});
+    RTCRayHit rh;
+    embreeIntersect(rtc_, ray, rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     geomToShape_[rh.hit.geomID]->fillIntersection(ray, rh.ray.tfar, rh.hit.primID, Vec2(rh.hit.u, rh.hit.v), its);
     its.wi = its.toLocal(-normalize(ray.d));
@@ -140,15 +168,8 @@ bool Scene::intersect(const Ray &ray, Intersection &its) const {
 
 bool Scene::occluded(const Ray &ray) const {
     ++tlRayCount;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRay r;
-    toEmbree(ray, r);
-    {
-        const ScopedQueryRay exact(ray);
-        rtcOccluded1(rtc_, &ctx, &r);
-    }
-    return r.tfar < 0;  // Embree marks an occluded ray with tfar = -inf
+    if (tlRayLog) tlRayLog->push_back({ray, true});
+    return embreeOccluded(rtc_, ray);
 }
 
 // Shadow rays stop short of the target by its own offset (the target usually lies on a surface too) and

@@ -88,6 +88,18 @@ public:
     static uint64_t threadRayCount();
     // The Embree scene, for benchmarks that measure raw traversal throughput.
     RTCScene embreeScene() const { return rtc_; }
+    // A ray as a renderer traced it: an intersect query, or an occlusion query (shadow).
+    struct TracedRay {
+        Ray ray;
+        bool shadow = false;
+    };
+    // While `log` is set on the calling thread (nullptr stops), every ray that thread traces is appended to
+    // it: bench_pathtracer replays a renderer's own rays through raw Embree, to compare the renderer with
+    // traversal on the same rays rather than on random ones. Thread-local, one pointer test per ray.
+    static void recordThreadRays(std::vector<TracedRay> *log);
+    // The Embree query of a traced ray and nothing else (no hit record, no counting, no recording);
+    // returns whether it hit.
+    bool traverse(const TracedRay &r) const;
     size_t primitiveCount() const;
 
 private:
