@@ -56,6 +56,8 @@ int runRender(const RenderArgs &a) {
 
     image.metadata["pathfarm.integrator"] = integrator->name();
     image.metadata["pathfarm.spp"] = std::to_string(stats.samplesPerPixel);
+    if (stats.partialPassPixels > 0)
+        image.metadata["pathfarm.partialPassPixels"] = std::to_string(stats.partialPassPixels);
     image.metadata["pathfarm.seed"] = std::to_string(a.seed);
     image.metadata["pathfarm.renderSeconds"] = std::to_string(stats.seconds);
     image.metadata["pathfarm.sceneLoadSeconds"] = std::to_string(loadSeconds);
@@ -78,10 +80,16 @@ int runRender(const RenderArgs &a) {
     pf::writePNG(png.string(), image, film.toneMap(), film.pngPixelFormat());
 
     const double secs = std::max(stats.seconds, 1e-9);
-    std::printf("%s: %dx%d, %lld spp, %s, %.2f s render (%.2f s load), %.3g samples/s, %.3g rays/s, %d threads -> %s\n",
-                a.scene.c_str(), image.width, image.height, static_cast<long long>(stats.samplesPerPixel),
-                integrator->name().c_str(), stats.seconds, loadSeconds, stats.samples / secs, stats.rays / secs,
-                opt.threads, exr.string().c_str());
+    // A time budget's partial last pass: "5 spp + 1 in 83% of pixels".
+    char partial[48] = "";
+    if (stats.partialPassPixels > 0)
+        std::snprintf(partial, sizeof partial, " + 1 in %.0f%% of pixels",
+                      100.0 * static_cast<double>(stats.partialPassPixels) / (double(image.width) * image.height));
+    std::printf(
+        "%s: %dx%d, %lld spp%s, %s, %.2f s render (%.2f s load), %.3g samples/s, %.3g rays/s, %d threads -> %s\n",
+        a.scene.c_str(), image.width, image.height, static_cast<long long>(stats.samplesPerPixel), partial,
+        integrator->name().c_str(), stats.seconds, loadSeconds, stats.samples / secs, stats.rays / secs, opt.threads,
+        exr.string().c_str());
     // Markov-chain renders: acceptance per mutation type, then the chains' further statistics.
     for (const pf::MutationCount &c : stats.counts)
         if (c.proposed > 0)

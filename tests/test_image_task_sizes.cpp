@@ -3,7 +3,8 @@
 // takes), it fills an spp budget exactly, and its bounds are in pixel samples, so that the first tasks of a
 // large film are short enough for a time budget (at 1024² BDPT, the old first task of 8 spp took 45 s on two
 // cores) and no task holds more pixel samples than 256 spp of a 256² film. Also the passes of an embedded
-// render under a time budget (timedPassSize), which the clock sizes.
+// render under a time budget (timedPassSize), which the clock sizes, and its partial last pass
+// (timedPartialTiles).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -119,6 +120,21 @@ TEST(TimedPassSizes, ASlowFilmTakesOneSamplePerPixelPerPassAndStopsBeforeOverrun
     EXPECT_DOUBLE_EQ(spent, 30.0);
     // A first pass longer than the budget is still taken (an image needs one sample), and nothing after it.
     EXPECT_EQ(timedPasses(30.0, 45.0, 0.0, spent), std::vector<int64_t>{1});
+}
+
+// When the next whole sample per pixel does not fit, the tiles of one that do, at the last pass's pace: at
+// 1024² BDPT (1024 tiles, 5 s per sample per pixel) after five passes in 25.8 s of 30, 860 of them.
+TEST(TimedPassSizes, APartialPassTakesTheTilesThatFit) {
+    const ImageTask last{4, 1};
+    EXPECT_EQ(timedPartialTiles(30.0, 25.8, last, 5.0, 1024), 860);
+    // Never the whole film (that would be a whole pass), none when not one tile fits or the pace is unknown.
+    EXPECT_EQ(timedPartialTiles(30.0, 25.8, last, 1e-3, 1024), 1023);
+    EXPECT_EQ(timedPartialTiles(30.0, 29.999, last, 5.0, 1024), 0);
+    EXPECT_EQ(timedPartialTiles(30.0, 31.0, last, 5.0, 1024), 0);
+    EXPECT_EQ(timedPartialTiles(30.0, 25.8, ImageTask{0, 0}, 5.0, 1024), 0);
+    EXPECT_EQ(timedPartialTiles(30.0, 25.8, last, 0.0, 1024), 0);
+    // A pass of several samples per pixel: the pace is per sample.
+    EXPECT_EQ(timedPartialTiles(30.0, 29.75, ImageTask{16, 8}, 4.0, 64), 32);
 }
 
 }  // namespace

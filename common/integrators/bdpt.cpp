@@ -185,7 +185,8 @@ std::vector<StrategyImage> BDPT::renderStrategyImages(const Scene &scene, const 
 Bitmap BDPT::render(const Scene &scene, const RenderOptions &opt, RenderStats &stats) const {
     Bitmap image = SamplingIntegrator::render(scene, opt, stats);
     if (strategyImages_.empty()) return image;
-    // The same samples as the image just rendered, also when it was rendered to a time budget.
+    // The same samples as the image just rendered, also when it was rendered to a time budget (whose partial
+    // last pass, if any, they leave out).
     RenderOptions same = opt;
     same.timeLimit = 0;
     same.spp = stats.samplesPerPixel;

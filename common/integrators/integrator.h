@@ -36,6 +36,9 @@ struct RenderOptions {
 struct RenderStats {
     double seconds = 0;  // wall time of rendering (scene loading excluded)
     int64_t samplesPerPixel = 0;
+    // Pixels that took one sample more than samplesPerPixel: a time budget's last, partial pass (image
+    // integrators; mergeCoveredPixels).
+    int64_t partialPassPixels = 0;
     uint64_t samples = 0;  // camera samples (pixel samples) taken
     uint64_t rays = 0;     // intersect + occluded queries
     // Markov-chain renders: transitions per mutation type and the chains' further statistics.

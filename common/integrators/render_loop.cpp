@@ -31,34 +31,52 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
     ImageBlock image = makeFilmBlock(scene);
     ProgressBar progress(opt.progress);
     const auto start = Clock::now();
+    const int64_t pixels = filmPixels(film);
     int64_t done = 0;
+    uint64_t samples = 0;  // pixel samples taken, which is also the light paths BDPT traced
     ImageTask last{0, 0};
     double lastTaskSeconds = 0;
-    for (;;) {
+    // Light tracing's splats are scaled by pixels / light paths (mergeCoveredPixels).
+    const auto splatScale = [&] {
+        return samples > 0 ? static_cast<double>(pixels) / static_cast<double>(samples) : 0.0;
+    };
+    for (bool partial = false; !partial;) {
         const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
-        // A time budget's passes are sized by the clock (whole passes only), a sample budget's by the fixed
-        // sequence the farm shares.
-        const int64_t size = timed ? timedPassSize(opt.timeLimit, elapsed, last, lastTaskSeconds)
-                                   : imageTaskSize(targetSpp, done, filmPixels(film));
-        if (size <= 0) break;
-        const ImageTask task{done, size};
-        const ImageTaskResult r = runImageTask(scene, *this, opt.seed, task, threads);
-        image.merge(r.block);
-        done += task.sampleCount;
+        // A time budget's passes are sized by the clock, a sample budget's by the fixed sequence the farm
+        // shares. When not even one sample per pixel fits in the time left, a last pass takes one sample in
+        // as many of the film's tiles as fit.
+        ImageTask task{done, timed ? timedPassSize(opt.timeLimit, elapsed, last, lastTaskSeconds)
+                                   : imageTaskSize(targetSpp, done, pixels)};
+        if (task.sampleCount <= 0 && timed) {
+            task =
+                ImageTask{done, 1, timedPartialTiles(opt.timeLimit, elapsed, last, lastTaskSeconds, filmTiles(film))};
+            partial = true;
+        }
+        if (task.sampleCount <= 0 || task.tiles == 0) break;
+        ImageTaskResult r = runImageTask(scene, *this, opt.seed, task, threads);
+        if (partial)
+            mergeCoveredPixels(image, std::move(r.block), film, task.tiles);
+        else
+            image.merge(r.block);
+        samples += r.samples;
+        if (partial)
+            stats.partialPassPixels = static_cast<int64_t>(r.pixels);
+        else
+            done += task.sampleCount;
         stats.rays += r.rays;
         last = task;
         lastTaskSeconds = r.seconds;
 
         const double total = std::chrono::duration<double>(Clock::now() - start).count();
         char label[64];
-        std::snprintf(label, sizeof label, "%lld spp, %.1f s", static_cast<long long>(done), total);
+        std::snprintf(label, sizeof label, "%.4g spp, %.1f s", static_cast<double>(samples) / pixels, total);
         progress.update(timed ? total / opt.timeLimit : static_cast<double>(done) / targetSpp, label);
-        if (opt.onPass) opt.onPass(done, film.develop(image, 1.0 / static_cast<double>(done)));
+        if (opt.onPass) opt.onPass(done, film.develop(image, splatScale()));
     }
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.samplesPerPixel = done;
-    stats.samples = static_cast<uint64_t>(done) * film.cropWidth() * film.cropHeight();
-    return film.develop(image, done > 0 ? 1.0 / static_cast<double>(done) : 0.0);
+    stats.samples = samples;
+    return film.develop(image, splatScale());
 }
 
 }  // namespace pf

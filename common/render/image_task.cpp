@@ -77,11 +77,50 @@ ImageBlock makeFilmBlock(const Scene &scene, BlockStorage storage) {
 
 int64_t filmPixels(const Film &film) { return int64_t{film.cropWidth()} * film.cropHeight(); }
 
+int64_t filmTiles(const Film &film) {
+    return static_cast<int64_t>(makeTiles(film.cropWidth(), film.cropHeight()).size());
+}
+
+void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc, int64_t tiles) {
+    const int w = filmDesc.cropWidth(), h = filmDesc.cropHeight();
+    // covered[y][x]: crop pixel (x, y) lies in one of the first `tiles` tiles.
+    std::vector<char> covered(static_cast<size_t>(w) * h, 0);
+    const std::vector<Tile> all = makeTiles(w, h);
+    for (size_t i = 0; i < all.size() && static_cast<int64_t>(i) < tiles; ++i)
+        for (int y = all[i].y; y < all[i].y + all[i].h; ++y)
+            std::fill_n(covered.begin() + static_cast<size_t>(y) * w + all[i].x, all[i].w, 1);
+    // A sample at most half a pixel from its pixel's centre reaches pixels up to radius + 1/2 away.
+    const int reach = static_cast<int>(std::floor(filmDesc.filter().radius() + 0.5));
+    const auto evenlySampled = [&](int x, int y) {  // crop coordinates, the border included
+        for (int qy = std::max(0, y - reach); qy <= std::min(h - 1, y + reach); ++qy)
+            for (int qx = std::max(0, x - reach); qx <= std::min(w - 1, x + reach); ++qx)
+                if (!covered[static_cast<size_t>(qy) * w + qx]) return false;
+        return true;
+    };
+    const int b = pass.border();
+    std::span<double> sums = pass.sumData(), weights = pass.weightData();
+    for (int y = -b; y < h + b; ++y)
+        for (int x = -b; x < w + b; ++x) {
+            if (evenlySampled(x, y)) continue;
+            const size_t i = static_cast<size_t>(y + b) * (w + 2 * b) + (x + b);
+            sums[3 * i] = sums[3 * i + 1] = sums[3 * i + 2] = 0.0;
+            weights[i] = 0.0;
+        }
+    film.merge(pass);
+}
+
 int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels) {
     const int64_t largest = scaledBound(kMaxSamplesPerTask, pixels);
     int64_t size = scaledBound(kMinSamplesPerTask, pixels);
     while (size < largest && 2 * size <= firstSample / kGrowthDivisor) size *= 2;
     return std::min(size, spp - firstSample);
+}
+
+int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles) {
+    if (last.sampleCount <= 0 || !(lastSeconds > 0) || tiles <= 0) return 0;
+    const double perTile = lastSeconds / static_cast<double>(last.sampleCount) / static_cast<double>(tiles);
+    const double fits = std::floor((budget - elapsed) / perTile);
+    return fits >= 1 ? static_cast<int64_t>(std::min(fits, static_cast<double>(tiles - 1))) : 0;
 }
 
 int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, double lastSeconds) {
@@ -99,7 +138,9 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
                              const ImageTask &task, int threads, const SampleSequence *sequence) {
     const auto start = std::chrono::steady_clock::now();
     const Film &film = scene.sensor().film();
-    const std::vector<Tile> tiles = makeTiles(film.cropWidth(), film.cropHeight());
+    std::vector<Tile> tiles = makeTiles(film.cropWidth(), film.cropHeight());
+    if (task.tiles >= 0 && task.tiles < static_cast<int64_t>(tiles.size()))
+        tiles.resize(static_cast<size_t>(task.tiles));
     const ReconstructionFilter *filter = &film.filter();
 
     std::vector<ImageBlock> blocks;
@@ -155,7 +196,8 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     for (auto &th : pool) th.join();
 
     for (const ImageBlock &b : blocks) result.block.merge(b);
-    result.samples = static_cast<uint64_t>(task.sampleCount) * film.cropWidth() * film.cropHeight();
+    for (const Tile &t : tiles) result.pixels += static_cast<uint64_t>(t.w) * static_cast<uint64_t>(t.h);
+    result.samples = static_cast<uint64_t>(task.sampleCount) * result.pixels;
     result.rays = rays.load();
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

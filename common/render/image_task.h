@@ -15,11 +15,15 @@ namespace pf {
 struct ImageTask {
     int64_t firstSample = 0;
     int64_t sampleCount = 1;
+    // The first `tiles` of the film's tiles only, in their fixed order (an embedded time budget's last,
+    // partial pass; see mergeCoveredPixels); -1: all of them, which is what the farm's tasks are.
+    int64_t tiles = -1;
 };
 
 struct ImageTaskResult {
     ImageBlock block;
     uint64_t samples = 0;  // pixel samples taken
+    uint64_t pixels = 0;   // pixels whose samples were taken (fewer than the film's in a partial pass)
     uint64_t rays = 0;
     double seconds = 0;
 };
@@ -44,11 +48,30 @@ int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels);
 // from the pace of the one before: about 1/64 of the budget, growing at most twofold per pass, and never
 // more than the time left holds, so that the last pass fills the budget instead of leaving a pass's time
 // unused. The first pass is one sample per pixel, and a film whose one sample per pixel takes longer than
-// the time left stops there. (A pass has fixed costs: starting threads, clearing and merging a film, and
-// the wait for the last tile; at 64² and 1 spp per pass they took 7% of two cores' time.)
+// the time left stops there (the render loop then fills the rest with a partial pass: timedPartialTiles). (A pass has
+// fixed costs: starting threads, clearing and merging a film, and the wait for the last tile; at 64² and 1 spp per pass
+// they took 7% of two cores' time.)
 int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, double lastSeconds);
+
+// The tiles of one sample per pixel that the time left holds at the pace of the pass `last` (which took
+// `lastSeconds`), out of `tiles`; 0 when not one does. At 1024², one sample per pixel of BDPT takes about 5 s
+// on two cores, and whole passes alone left 4.2 s of a 30 s budget unused.
+int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles);
 
 // The film's pixels as imageTaskSize counts them.
 int64_t filmPixels(const Film &film);
+
+// The tiles a task of the film is rendered in (the unit of a partial pass).
+int64_t filmTiles(const Film &film);
+
+// Adds a partial pass (a task over the film's first `tiles` tiles) to `film`, a block of whole passes: the
+// weighted sums and weights of the pixels whose every sample could come from those tiles, all of its splats.
+// A pixel's value is the ratio of its sums, an average of the samples in the filter's footprint weighted by
+// the filter; where the footprint reaches uncovered pixels, that footprint would hold one sample more per pixel
+// on one side than on the other, and the average would weight the covered side more. So those pixels, and
+// the uncovered ones, keep the whole passes' samples alone, and every pixel's footprint stays evenly sampled.
+// Light tracing's splats estimate their image from every light path traced, wherever its camera sample was,
+// so they all count, and the film's splat scale becomes pixels / (light paths traced) (Film::develop).
+void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc, int64_t tiles);
 
 }  // namespace pf
