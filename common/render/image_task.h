@@ -48,14 +48,15 @@ int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels);
 // from the pace of the one before: about 1/64 of the budget, growing at most twofold per pass, and never
 // more than the time left holds, so that the last pass fills the budget instead of leaving a pass's time
 // unused. The first pass is one sample per pixel, and a film whose one sample per pixel takes longer than
-// the time left stops there (the render loop then fills the rest with a partial pass: timedPartialTiles). (A pass has
-// fixed costs: starting threads, clearing and merging a film, and the wait for the last tile; at 64² and 1 spp per pass
-// they took 7% of two cores' time.)
+// the time left stops there; the render loop then fills the rest with a partial pass (timedPartialTiles).
+// A pass has fixed costs: starting threads, clearing and merging a film, and the wait for the last tile; at
+// 64² and 1 spp per pass they took 7% of two cores' time.
 int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, double lastSeconds);
 
 // The tiles of one sample per pixel that the time left holds at the pace of the pass `last` (which took
-// `lastSeconds`), out of `tiles`; 0 when not one does. At 1024², one sample per pixel of BDPT takes about 5 s
-// on two cores, and whole passes alone left 4.2 s of a 30 s budget unused.
+// `lastSeconds`), out of `tiles` (never all of them: that would be a whole pass); 0 when not one does. At 1024²,
+// one sample per pixel of BDPT takes about 5 s on two cores, and whole passes alone left 4.9 s of a 30 s budget
+// unused on cornell-box.
 int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles);
 
 // The film's pixels as imageTaskSize counts them.
