@@ -14,6 +14,7 @@
 #include "farm/job_setup.h"
 #include "film_files.h"
 #include "job_spec_check.h"
+#include "render/image_task.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -190,6 +191,9 @@ void Master::recoverJob(const StoredJob &stored) {
                    : t.state == task_state::kLeased   ? TaskRuntime::State::Leased
                                                       : TaskRuntime::State::Pending;
         j.nextFirstSample = rt.work.image().first_sample() + rt.work.image().sample_count();
+        // A partial last task that the checkpoint holds (the merges after it are replayed and set it again).
+        if (rt.work.has_image() && rt.work.image().tiles() > 0 && t.index < j.film.merged)
+            j.film.partialPixels = tilePixels(*j.film.film, rt.work.image().tiles());
         j.tasks.push_back(std::move(rt));
     }
     // Leases survive the restart with a fresh deadline: their workers reconnect and carry on.

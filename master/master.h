@@ -194,6 +194,8 @@ private:
                                                      const std::vector<int64_t> &indices);
     std::optional<int64_t> nextTaskFor(JobRuntime &j, const WorkerRuntime &w);
     bool mayIssue(JobRuntime &j);
+    // Ends a time budget: no task after those issued.
+    void closeTimeBudget(JobRuntime &j);
     // Whether a batch of the batchTasks image tasks of j from firstTask may take one more (time budgets: if it
     // still ends in time).
     bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks) const;

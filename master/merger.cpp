@@ -18,6 +18,7 @@
 #include "farm/error.h"
 #include "farm/rpc.h"
 #include "film_files.h"
+#include "render/image_task.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -314,6 +315,12 @@ void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput out
         return;
     }
     ImageBlock &block = std::get<ImageBlock>(output);
+    if (const int64_t tiles = work.image().tiles(); tiles > 0) {
+        // A time budget's partial last task (scheduler.cpp): where it covers a pixel's whole filter footprint.
+        f.partialPixels = tilePixels(*f.film, tiles);
+        mergeCoveredPixels(*f.block, std::move(block), *f.film, tiles);
+        return;
+    }
     f.block->merge(block);
     f.spp += work.image().sample_count();
     const std::lock_guard<std::mutex> lock(f.spareMu);
@@ -377,6 +384,7 @@ void Master::writeFinalImage(JobRuntime &j, double seconds) {
     const JobSpec &spec = j.record.spec();
     image.metadata["pathfarm.integrator"] = j.record.integrator();
     image.metadata["pathfarm.spp"] = std::to_string(f.spp);
+    if (f.partialPixels > 0) image.metadata["pathfarm.partialPassPixels"] = std::to_string(f.partialPixels);
     image.metadata["pathfarm.seed"] = std::to_string(spec.seed());
     image.metadata["pathfarm.renderSeconds"] = std::to_string(seconds);
     image.metadata["pathfarm.sceneLoadSeconds"] = std::to_string(j.record.scene_load_seconds());
@@ -423,7 +431,10 @@ void Master::closeFilm(JobRuntime &j) {
 
 Bitmap Master::develop(const JobRuntime &j) const {
     if (j.film.chain) return j.film.chain->job->develop();
-    return j.film.film->develop(*j.film.block, 1.0 / static_cast<double>(j.film.spp));
+    // Light tracing's splats are scaled by pixels / light paths traced (render/image_task.h).
+    const double pixels = static_cast<double>(filmPixels(*j.film.film));
+    return j.film.film->develop(
+        *j.film.block, pixels / (static_cast<double>(j.film.spp) * pixels + static_cast<double>(j.film.partialPixels)));
 }
 
 std::shared_ptr<const Bitmap> Master::preview(int64_t id) {

@@ -30,7 +30,8 @@ inline bool isActive(pathfarm::v1::JobState s) {
 }
 
 // Size of every image task of a job; a time budget draws tasks as an unbounded spp budget does (so a timed
-// job that ended after n tasks has exactly the bits of an spp job of the same sample count).
+// job that ended after n tasks has exactly the bits of an spp job of the same sample count, and one that ended
+// with a partial task has them where that task left pixels alone, and the next count's where it covered them).
 inline int64_t taskSize(const pathfarm::v1::Job &job, int64_t firstSample) {
     const auto &budget = job.spec().budget();
     return imageTaskSize(budget.has_spp() ? budget.spp() : std::numeric_limits<int64_t>::max(), firstSample,
@@ -66,9 +67,10 @@ struct Master::JobFilm {
     std::optional<ImageBlock> block;
     std::unique_ptr<ChainState> chain;
     bool open() const { return block || chain; }
-    int64_t merged = 0;        // tasks [0, merged) are in `block`
-    int64_t checkpointed = 0;  // tasks [0, checkpointed) are in the checkpoint file
-    int64_t spp = 0;           // image jobs: samples per pixel merged
+    int64_t merged = 0;         // tasks [0, merged) are in `block`
+    int64_t checkpointed = 0;   // tasks [0, checkpointed) are in the checkpoint file
+    int64_t spp = 0;            // image jobs: samples per pixel merged, in whole tasks
+    int64_t partialPixels = 0;  // image jobs: the pixels of a merged partial last task (render/image_task.h)
     struct Pending {
         std::string file;
         pathfarm::v1::TaskStats stats;
@@ -109,6 +111,9 @@ struct Master::JobRuntime {
     std::set<int64_t> retry;         // issued tasks waiting for another attempt, lowest first
     int64_t nextFirstSample = 0;
     int64_t total = 0;  // tasks the job will have; 0 while a time budget is open or the seeding runs
+    // An image job's time budget ends with a partial task of this many tiles (mayIssue chooses it, nextTaskFor
+    // issues it and closes the budget); 0: none chosen.
+    int64_t partialTiles = 0;
     // Markov-chain jobs: tasks [0, chainFirst) seed the chains and render the direct component; chain tasks
     // are issued once `seeded` (the normalizer exists, and is immutable from then on).
     bool chain = false;
@@ -122,6 +127,7 @@ struct Master::JobRuntime {
     int64_t taskCount = 0;
     int64_t taskSpp = 0;  // image jobs
     void countTime(const pathfarm::v1::TaskSpec &work, int64_t tasks, double seconds) {
+        if (work.has_image() && work.image().tiles() > 0) return;  // a partial task: the last one anyway
         taskSeconds += seconds;
         taskCount += tasks;
         if (work.has_image()) taskSpp += work.image().sample_count();

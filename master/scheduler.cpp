@@ -12,6 +12,7 @@
 
 #include "farm/convert.h"
 #include "farm/rpc.h"
+#include "render/image_task.h"
 #include "runtime.h"
 
 namespace pf::master {
@@ -90,7 +91,8 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
                  ++want) {
                 const std::optional<int64_t> next = nextTaskFor(j, w);
                 if (!next) break;
-                if (*next != want) {
+                // A partial task is never batched: the merger merges a batch as one task of all its samples.
+                if (*next != want || j.tasks[static_cast<size_t>(*next)].work.image().tiles() > 0) {
                     j.retry.insert(*next);  // issued but not in the batch's row: the next request takes it
                     break;
                 }
@@ -192,12 +194,26 @@ std::optional<int64_t> Master::nextTaskFor(JobRuntime &j, const WorkerRuntime &w
         if (startsPass(j, index)) j.passStartMs = unixMs();
     } else {
         t.work.mutable_image()->set_first_sample(j.nextFirstSample);
-        t.work.mutable_image()->set_sample_count(taskSize(j.record, j.nextFirstSample));
+        t.work.mutable_image()->set_sample_count(j.partialTiles > 0 ? 1 : taskSize(j.record, j.nextFirstSample));
+        if (j.partialTiles > 0) t.work.mutable_image()->set_tiles(j.partialTiles);
         j.nextFirstSample += t.work.image().sample_count();
     }
     t.work.set_task_index(index);
     j.tasks.push_back(std::move(t));
+    if (j.partialTiles > 0) {
+        spdlog::info("job={}: the last task is partial: one sample in {} tiles", j.record.id(), j.partialTiles);
+        j.partialTiles = 0;
+        closeTimeBudget(j);
+    }
     return index;
+}
+
+void Master::closeTimeBudget(JobRuntime &j) {
+    j.total = static_cast<int64_t>(j.tasks.size());
+    store_.saveJob(snapshot(j));
+    spdlog::info("job={}: time budget reached after {:.2f} s: {} tasks issued", j.record.id(),
+                 (unixMs() - j.record.started_unix_ms()) / 1000.0, j.total);
+    touch();
 }
 
 bool Master::batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks) const {
@@ -232,11 +248,18 @@ bool Master::mayIssue(JobRuntime &j) {
     double estimate = j.expectedSeconds(nextSpp);
     if (j.chain && j.film.chain->job->tasksPerPass() > 1 && j.passStartMs > 0)
         estimate = std::max(estimate, (unixMs() - j.passStartMs) / 1000.0);
-    if (elapsed + estimate <= j.record.spec().budget().time_seconds()) return true;
-    j.total = static_cast<int64_t>(j.tasks.size());
-    store_.saveJob(snapshot(j));
-    spdlog::info("job={}: time budget reached after {:.2f} s: {} tasks issued", j.record.id(), elapsed, j.total);
-    touch();
+    const double budget = j.record.spec().budget().time_seconds();
+    if (elapsed + estimate <= budget) return true;
+    // An image job whose next whole task no longer fits ends with a partial one: one sample in as many of the
+    // film's tiles as the time left holds at one worker's pace (render/image_task.h; the merger adds it where it
+    // covers a pixel's whole filter footprint). Without it a 1024² BDPT job, whose tasks are one sample per
+    // pixel of about 5 s each, left up to a task's time of its budget unused on every worker.
+    if (!j.chain && j.taskCount > 0) {
+        j.partialTiles =
+            timedPartialTiles(budget, elapsed, ImageTask{0, 1}, j.expectedSeconds(1), filmTiles(*j.film.film));
+        if (j.partialTiles > 0) return true;
+    }
+    closeTimeBudget(j);
     return false;
 }
 

@@ -336,7 +336,8 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
 
 ImageTaskResult Worker::renderImage(const Prepared &p, const v1::TaskSpec &task, int threads) const {
     const uint64_t seed = task.job().seed();
-    const ImageTask image{task.image().first_sample(), task.image().sample_count()};
+    const ImageTask image{task.image().first_sample(), task.image().sample_count(),
+                          task.image().tiles() > 0 ? task.image().tiles() : -1};
     // A chain job's direct component renders with its own integrator, seed and numbers (render/chain_job.h).
     if (task.image().direct()) {
         const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());

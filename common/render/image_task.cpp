@@ -81,8 +81,15 @@ int64_t filmTiles(const Film &film) {
     return static_cast<int64_t>(makeTiles(film.cropWidth(), film.cropHeight()).size());
 }
 
-void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc, int64_t tiles) {
-    const int w = filmDesc.cropWidth(), h = filmDesc.cropHeight();
+int64_t tilePixels(const Film &film, int64_t tiles) {
+    int64_t pixels = 0;
+    const std::vector<Tile> all = makeTiles(film.cropWidth(), film.cropHeight());
+    for (size_t i = 0; i < all.size() && static_cast<int64_t>(i) < tiles; ++i) pixels += int64_t{all[i].w} * all[i].h;
+    return pixels;
+}
+
+std::vector<char> partialPassFootprints(const Film &film, int64_t tiles) {
+    const int w = film.cropWidth(), h = film.cropHeight();
     // covered[y][x]: crop pixel (x, y) lies in one of the first `tiles` tiles.
     std::vector<char> covered(static_cast<size_t>(w) * h, 0);
     const std::vector<Tile> all = makeTiles(w, h);
@@ -90,18 +97,29 @@ void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc,
         for (int y = all[i].y; y < all[i].y + all[i].h; ++y)
             std::fill_n(covered.begin() + static_cast<size_t>(y) * w + all[i].x, all[i].w, 1);
     // A sample at most half a pixel from its pixel's centre reaches pixels up to radius + 1/2 away.
-    const int reach = static_cast<int>(std::floor(filmDesc.filter().radius() + 0.5));
-    const auto evenlySampled = [&](int x, int y) {  // crop coordinates, the border included
-        for (int qy = std::max(0, y - reach); qy <= std::min(h - 1, y + reach); ++qy)
-            for (int qx = std::max(0, x - reach); qx <= std::min(w - 1, x + reach); ++qx)
-                if (!covered[static_cast<size_t>(qy) * w + qx]) return false;
-        return true;
-    };
+    const int reach = static_cast<int>(std::floor(film.filter().radius() + 0.5));
+    std::vector<char> footprint(covered.size(), 0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool all = true;
+            for (int qy = std::max(0, y - reach); all && qy <= std::min(h - 1, y + reach); ++qy)
+                for (int qx = std::max(0, x - reach); all && qx <= std::min(w - 1, x + reach); ++qx)
+                    all = covered[static_cast<size_t>(qy) * w + qx] != 0;
+            footprint[static_cast<size_t>(y) * w + x] = all;
+        }
+    return footprint;
+}
+
+void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc, int64_t tiles) {
+    const int w = filmDesc.cropWidth(), h = filmDesc.cropHeight();
+    const std::vector<char> footprint = partialPassFootprints(filmDesc, tiles);
+    // The block's border (pixels outside the crop window that samples reach) is never covered: no task samples
+    // there.
     const int b = pass.border();
     std::span<double> sums = pass.sumData(), weights = pass.weightData();
     for (int y = -b; y < h + b; ++y)
         for (int x = -b; x < w + b; ++x) {
-            if (evenlySampled(x, y)) continue;
+            if (x >= 0 && y >= 0 && x < w && y < h && footprint[static_cast<size_t>(y) * w + x]) continue;
             const size_t i = static_cast<size_t>(y + b) * (w + 2 * b) + (x + b);
             sums[3 * i] = sums[3 * i + 1] = sums[3 * i + 2] = 0.0;
             weights[i] = 0.0;

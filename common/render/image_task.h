@@ -5,6 +5,7 @@
 // task order gives the same bits wherever the tasks ran.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "core/sample_sequence.h"
 #include "image/film.h"
@@ -64,6 +65,13 @@ int64_t filmPixels(const Film &film);
 
 // The tiles a task of the film is rendered in (the unit of a partial pass).
 int64_t filmTiles(const Film &film);
+
+// The pixels of the film's first `tiles` tiles (a partial pass's samples).
+int64_t tilePixels(const Film &film, int64_t tiles);
+
+// Per crop pixel, row-major: whether a partial pass over the film's first `tiles` tiles covers its whole filter
+// footprint, and so gives it one more sample (mergeCoveredPixels).
+std::vector<char> partialPassFootprints(const Film &film, int64_t tiles);
 
 // Adds a partial pass (a task over the film's first `tiles` tiles) to `film`, a block of whole passes: the
 // weighted sums and weights of the pixels whose every sample could come from those tiles, all of its splats.

@@ -30,7 +30,8 @@ std::string describeWork(const pathfarm::v1::TaskSpec &work) {
                std::to_string(work.chain().mutations()) + " mutations";
     return std::string(work.image().direct() ? "direct component, " : "") + "samples [" +
            std::to_string(work.image().first_sample()) + ", " +
-           std::to_string(work.image().first_sample() + work.image().sample_count()) + ")";
+           std::to_string(work.image().first_sample() + work.image().sample_count()) + ")" +
+           (work.image().tiles() > 0 ? " in the first " + std::to_string(work.image().tiles()) + " tiles" : "");
 }
 
 NameValues toNameValues(const google::protobuf::RepeatedPtrField<pathfarm::v1::Param> &params) {

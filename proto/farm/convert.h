@@ -11,8 +11,8 @@ namespace pf::farm {
 std::string stateName(pathfarm::v1::JobState s);
 std::string stateName(pathfarm::v1::WorkerState s);
 
-// What a task does, for logs: "samples [0, 8)", "direct component, samples [0, 8)", "seeding pixels
-// [0, 4096)", "chain task 3, 1 chains of 16384 mutations".
+// What a task does, for logs: "samples [0, 8)", "samples [5, 6) in the first 460 tiles", "direct component,
+// samples [0, 8)", "seeding pixels [0, 4096)", "chain task 3, 1 chains of 16384 mutations".
 std::string describeWork(const pathfarm::v1::TaskSpec &work);
 
 // A job's parameters or definitions as the renderer takes them.
