@@ -129,8 +129,12 @@ v1::Job follow(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_
 void fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id, const std::string &output) {
     const FetchedImage image = client::fetchImage(stub, farm, id);
     writeBytes(output, image.exr);
-    std::printf("job %" PRId64 ": %s image, %" PRId64 " spp -> %s\n", id, image.info.final() ? "final" : "running",
-                image.info.samples_per_pixel(), output.c_str());
+    // A time budget's partial last task, as `render` says it: "5 spp + 1 in 71% of pixels".
+    char partial[48] = "";
+    if (image.info.partial_pass_share() > 0)
+        std::snprintf(partial, sizeof partial, " + 1 in %.0f%% of pixels", 100.0 * image.info.partial_pass_share());
+    std::printf("job %" PRId64 ": %s image, %" PRId64 " spp%s -> %s\n", id, image.info.final() ? "final" : "running",
+                image.info.samples_per_pixel(), partial, output.c_str());
 }
 
 }  // namespace

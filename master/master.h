@@ -116,6 +116,7 @@ public:
         std::string bytes;
         bool final = false;
         int64_t samplesPerPixel = 0;
+        double partialPassShare = 0;  // of the pixels, with a partial last task's sample
     };
     std::optional<ExrImage> image(int64_t id) const;
     // The job's image as merged so far, or nullptr before the first merge. Developed here, on request,

@@ -466,6 +466,9 @@ std::optional<Master::ExrImage> Master::image(int64_t id) const {
     }
     const std::lock_guard<std::mutex> filmLock(j->film.mu);
     ExrImage out;
+    if (j->film.film)
+        out.partialPassShare =
+            static_cast<double>(j->film.partialPixels) / static_cast<double>(filmPixels(*j->film.film));
     {
         const std::lock_guard<std::mutex> lock(mu_);
         out.final = j->record.state() == v1::JOB_DONE;

@@ -148,6 +148,7 @@ Status ClientService::FetchImage(grpc::ServerContext *ctx, const v1::FetchImageR
         chunk.mutable_info()->set_size(image->bytes.size());
         chunk.mutable_info()->set_final(image->final);
         chunk.mutable_info()->set_samples_per_pixel(image->samplesPerPixel);
+        chunk.mutable_info()->set_partial_pass_share(image->partialPassShare);
         if (!writer->Write(chunk)) return Status::OK;
         const size_t step = chunkBytes(master_);
         for (size_t off = 0; off < image->bytes.size(); off += step) {

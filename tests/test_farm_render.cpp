@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <cstdio>
+
 #include "farm/harness.h"
 #include "image/bitmap.h"
 #include "render/image_task.h"
@@ -187,6 +189,15 @@ TEST_F(FarmRender, TimeBudgetIssuesWholeTasksThenAPartialOneAndRecordsTheTrueTim
     // A timed job of n tasks has the bits of an spp job of the same sample count, and a partial last task's
     // pixels those of the next count.
     expectTimedImage(scene, "--seed 5", out);
+    // `submit --wait` says what `render` says of a partial last pass.
+    if (const auto partial = img.metadata.find("pathfarm.partialPassPixels"); partial != img.metadata.end()) {
+        char line[64];
+        std::snprintf(line, sizeof line, "final image, %d spp + 1 in %.0f%% of pixels", spp,
+                      100.0 * std::stod(partial->second) / (32 * 32));
+        EXPECT_NE(output.find(line), std::string::npos) << output;
+    } else {
+        EXPECT_EQ(output.find(" + 1 in "), std::string::npos) << output;
+    }
 }
 
 // A large film under a time budget: before any result tells the job's pace, the workers get only the
