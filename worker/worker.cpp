@@ -39,8 +39,7 @@ Worker::Worker(WorkerConfig config)
       cache_(cfg_.cacheDir, std::numeric_limits<uint64_t>::max()) {}
 
 Worker::~Worker() {
-    stopping_ = true;
-    changed_.notify_all();
+    stopThreads();
     if (heartbeatThread_.joinable()) heartbeatThread_.join();
     if (uploadThread_.joinable()) uploadThread_.join();
     for (std::thread &t : runners_)
@@ -124,6 +123,17 @@ bool Worker::isLost(int64_t attempt) const {
     return lost_.count(attempt) != 0;
 }
 
+// Set under the mutex: a thread that has just found stopping_ false under it and is about to wait would
+// otherwise miss this notification and wait forever (a draining worker whose master was stopped once hung
+// here, joining its upload thread, in a loaded suite run).
+void Worker::stopThreads() {
+    {
+        const std::lock_guard<std::mutex> lock(mu_);
+        stopping_ = true;
+    }
+    changed_.notify_all();
+}
+
 void Worker::drain() {
     draining_ = true;
     const std::lock_guard<std::mutex> lock(mu_);
@@ -175,8 +185,7 @@ int Worker::run() {
     // for its tasks and uploads or for a thread (a suite run once saw a silent master's worker hang here).
     spdlog::info("worker={}: drain: tasks and uploads done ({} abandoned); stopping its threads", workerId(),
                  abandoned);
-    stopping_ = true;
-    changed_.notify_all();
+    stopThreads();
     heartbeatThread_.join();
     uploadThread_.join();
     for (std::thread &t : runners_) t.join();

@@ -57,6 +57,8 @@ public:
     void drain();
 
 private:
+    // Tells the heartbeat, upload and runner threads to stop (they exit once their current call or task ends).
+    void stopThreads();
     struct Result {
         int64_t attempt;
         std::vector<int64_t> batch;  // the attempts of the tasks after `attempt`'s that the payload holds
