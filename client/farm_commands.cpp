@@ -16,6 +16,7 @@
 #include "farm_client.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "pathfarm/v1/client.grpc.pb.h"
+#include "render/image_task.h"
 
 namespace pf::client {
 
@@ -129,12 +130,9 @@ v1::Job follow(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_
 void fetchImage(v1::ClientService::Stub &stub, const FarmConnection &farm, int64_t id, const std::string &output) {
     const FetchedImage image = client::fetchImage(stub, farm, id);
     writeBytes(output, image.exr);
-    // A time budget's partial last task, as `render` says it: "5 spp + 1 in 71% of pixels".
-    char partial[48] = "";
-    if (image.info.partial_pass_share() > 0)
-        std::snprintf(partial, sizeof partial, " + 1 in %.0f%% of pixels", 100.0 * image.info.partial_pass_share());
+    const std::string partial = partialPassSummary(image.info.partial_pass_share());
     std::printf("job %" PRId64 ": %s image, %" PRId64 " spp%s -> %s\n", id, image.info.final() ? "final" : "running",
-                image.info.samples_per_pixel(), partial, output.c_str());
+                image.info.samples_per_pixel(), partial.c_str(), output.c_str());
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "image/bitmap.h"
 #include "image/film.h"
 #include "integrators/integrator.h"
+#include "render/image_task.h"
 #include "scene/scene.h"
 
 namespace {
@@ -80,14 +81,11 @@ int runRender(const RenderArgs &a) {
     pf::writePNG(png.string(), image, film.toneMap(), film.pngPixelFormat());
 
     const double secs = std::max(stats.seconds, 1e-9);
-    // A time budget's partial last pass: "5 spp + 1 in 83% of pixels".
-    char partial[48] = "";
-    if (stats.partialPassPixels > 0)
-        std::snprintf(partial, sizeof partial, " + 1 in %.0f%% of pixels",
-                      100.0 * static_cast<double>(stats.partialPassPixels) / (double(image.width) * image.height));
+    const std::string partial =
+        pf::partialPassSummary(static_cast<double>(stats.partialPassPixels) / (double(image.width) * image.height));
     std::printf(
         "%s: %dx%d, %lld spp%s, %s, %.2f s render (%.2f s load), %.3g samples/s, %.3g rays/s, %d threads -> %s\n",
-        a.scene.c_str(), image.width, image.height, static_cast<long long>(stats.samplesPerPixel), partial,
+        a.scene.c_str(), image.width, image.height, static_cast<long long>(stats.samplesPerPixel), partial.c_str(),
         integrator->name().c_str(), stats.seconds, loadSeconds, stats.samples / secs, stats.rays / secs, opt.threads,
         exr.string().c_str());
     // Markov-chain renders: acceptance per mutation type, then the chains' further statistics.

@@ -431,10 +431,7 @@ void Master::closeFilm(JobRuntime &j) {
 
 Bitmap Master::develop(const JobRuntime &j) const {
     if (j.film.chain) return j.film.chain->job->develop();
-    // Light tracing's splats are scaled by pixels / light paths traced (render/image_task.h).
-    const double pixels = static_cast<double>(filmPixels(*j.film.film));
-    return j.film.film->develop(
-        *j.film.block, pixels / (static_cast<double>(j.film.spp) * pixels + static_cast<double>(j.film.partialPixels)));
+    return j.film.film->develop(*j.film.block, splatScale(filmPixels(*j.film.film), j.film.spp, j.film.partialPixels));
 }
 
 std::shared_ptr<const Bitmap> Master::preview(int64_t id) {

@@ -36,10 +36,6 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
     uint64_t samples = 0;  // pixel samples taken, which is also the light paths BDPT traced
     ImageTask last{0, 0};
     double lastTaskSeconds = 0;
-    // Light tracing's splats are scaled by pixels / light paths (mergeCoveredPixels).
-    const auto splatScale = [&] {
-        return samples > 0 ? static_cast<double>(pixels) / static_cast<double>(samples) : 0.0;
-    };
     for (bool partial = false; !partial;) {
         const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
         // A time budget's passes are sized by the clock, a sample budget's by the fixed sequence the farm
@@ -71,12 +67,12 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
         char label[64];
         std::snprintf(label, sizeof label, "%.4g spp, %.1f s", static_cast<double>(samples) / pixels, total);
         progress.update(timed ? total / opt.timeLimit : static_cast<double>(done) / targetSpp, label);
-        if (opt.onPass) opt.onPass(done, film.develop(image, splatScale()));
+        if (opt.onPass) opt.onPass(done, film.develop(image, splatScale(pixels, done, stats.partialPassPixels)));
     }
     stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     stats.samplesPerPixel = done;
     stats.samples = samples;
-    return film.develop(image, splatScale());
+    return film.develop(image, splatScale(pixels, done, stats.partialPassPixels));
 }
 
 }  // namespace pf

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -101,11 +102,11 @@ std::vector<char> partialPassFootprints(const Film &film, int64_t tiles) {
     std::vector<char> footprint(covered.size(), 0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            bool all = true;
-            for (int qy = std::max(0, y - reach); all && qy <= std::min(h - 1, y + reach); ++qy)
-                for (int qx = std::max(0, x - reach); all && qx <= std::min(w - 1, x + reach); ++qx)
-                    all = covered[static_cast<size_t>(qy) * w + qx] != 0;
-            footprint[static_cast<size_t>(y) * w + x] = all;
+            bool inside = true;
+            for (int qy = std::max(0, y - reach); inside && qy <= std::min(h - 1, y + reach); ++qy)
+                for (int qx = std::max(0, x - reach); inside && qx <= std::min(w - 1, x + reach); ++qx)
+                    inside = covered[static_cast<size_t>(qy) * w + qx] != 0;
+            footprint[static_cast<size_t>(y) * w + x] = inside;
         }
     return footprint;
 }
@@ -125,6 +126,18 @@ void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc,
             weights[i] = 0.0;
         }
     film.merge(pass);
+}
+
+double splatScale(int64_t pixels, int64_t spp, int64_t partialPixels) {
+    const double paths = static_cast<double>(spp) * static_cast<double>(pixels) + static_cast<double>(partialPixels);
+    return paths > 0 ? static_cast<double>(pixels) / paths : 0.0;
+}
+
+std::string partialPassSummary(double share) {
+    if (!(share > 0)) return "";
+    char text[48];
+    std::snprintf(text, sizeof text, " + 1 in %.0f%% of pixels", 100.0 * share);
+    return text;
 }
 
 int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels) {

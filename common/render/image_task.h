@@ -5,6 +5,7 @@
 // task order gives the same bits wherever the tasks ran.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/sample_sequence.h"
@@ -82,5 +83,14 @@ std::vector<char> partialPassFootprints(const Film &film, int64_t tiles);
 // Light tracing's splats estimate their image from every light path traced, wherever its camera sample was,
 // so they all count, and the film's splat scale becomes pixels / (light paths traced) (Film::develop).
 void mergeCoveredPixels(ImageBlock &film, ImageBlock pass, const Film &filmDesc, int64_t tiles);
+
+// The splat scale of a film of `pixels` pixels whose whole passes took `spp` samples per pixel and whose partial
+// pass `partialPixels` more: pixels / light paths traced (Film::develop). pixels / (spp pixels) rounds to the same
+// double as 1 / spp, so images without a partial pass keep their bits.
+double splatScale(int64_t pixels, int64_t spp, int64_t partialPixels);
+
+// How a render's summary says a partial pass covered `share` of the pixels: " + 1 in 71% of pixels" (empty
+// without one), for `render`, `submit --wait` and `fetch` alike.
+std::string partialPassSummary(double share);
 
 }  // namespace pf
