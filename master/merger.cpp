@@ -90,6 +90,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
     writeFilmFile(file.string(), payload, false);
 
     bool accepted = true;
+    double transferSeconds = -1;
     {
         const std::lock_guard<std::mutex> lock(mu_);
         // The leases may have expired or the job ended while the payload was on its way.
@@ -114,6 +115,10 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 j->retry.erase(task + i);
             }
             if (task >= j->chainFirst) j->countTime(work, count, stats.seconds());
+            if (const Clock::time_point leased = j->tasks[static_cast<size_t>(task)].leased;
+                leased != Clock::time_point{})
+                transferSeconds = std::max(0.0, std::chrono::duration<double>(Clock::now() - leased).count() -
+                                                    stats.seconds() - stats.scene_load_seconds());
             if (const auto w = workers_.find(worker); w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
                 for (const int64_t a : attempts) wr.attempts.erase(a);
@@ -137,7 +142,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
     {
         const std::lock_guard<std::mutex> filmLock(j->film.mu);
         JobFilm &f = j->film;
-        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0, count};
+        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0, count, transferSeconds};
         if (task == f.merged) {
             mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
         } else if (const size_t bytes = heldBytes(*output); bytes > 0 && f.heldBytes + bytes <= JobFilm::kHeldBytes) {
@@ -211,6 +216,9 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     // apart), BDPT samples of seeding tasks, mutations of chain tasks.
     uint64_t samples = 0, seedingSamples = 0, directSamples = 0, mutations = 0, rays = 0;
     double seconds = 0, loadSeconds = 0;
+    // Each timed task's transfer and merge (JobRuntime::overheadSeconds).
+    double overheadSeconds = 0;
+    int64_t overheadCount = 0;
     // Burst tasks sample their own seeds (render/burst.h): those BDPT samples count as seeding.
     const uint64_t burstSeedsBefore = f.chain ? f.chain->job->chains().seedSamples : 0;
     for (auto it = f.pending.find(f.merged); it != f.pending.end(); it = f.pending.find(f.merged)) {
@@ -235,7 +243,12 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
             }
         }
         mergeOutput(j, work, std::move(*output));
-        seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+        const double mergeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+        seconds += mergeSeconds;
+        if (f.merged >= j.chainFirst && it->second.transferSeconds >= 0) {
+            overheadSeconds += it->second.transferSeconds + mergeSeconds;
+            ++overheadCount;
+        }
         (work.has_seeding()                          ? seedingSamples
          : work.has_chain()                          ? mutations
          : work.has_image() && work.image().direct() ? directSamples
@@ -260,6 +273,8 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
         j.record.set_rays(j.record.rays() + rays);
         j.record.set_worker_scene_load_seconds(j.record.worker_scene_load_seconds() + loadSeconds);
         if (f.chain) recordChainMerge(j, seedingSamples, directSamples);
+        j.overheadSeconds += overheadSeconds;
+        j.overheadCount += overheadCount;
         counters_.resultsMerged += f.merged - before;
         counters_.mergeSeconds += seconds;
         counters_.samplesMerged += pixelSamples;

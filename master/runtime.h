@@ -57,6 +57,7 @@ struct Master::TaskRuntime {
     int64_t attempt = 0;             // the latest attempt; only its result is accepted
     std::set<std::string> failedOn;  // workers on which an attempt failed
     int failures = 0;
+    Clock::time_point leased{};  // of the latest attempt; the epoch for tasks leased before a restart
 };
 
 struct Master::JobFilm {
@@ -82,6 +83,9 @@ struct Master::JobFilm {
         size_t bytes = 0;
         // A batched result holds tasks [index, index + tasks), and `work` their samples together.
         int64_t tasks = 1;
+        // Its time from the lease to its acceptance beyond the worker's rendering and scene load: the transfer
+        // both ways, the worker's encoding, the master's decoding. Negative where the lease time is unknown.
+        double transferSeconds = -1;
     };
     std::map<int64_t, Pending> pending;  // accepted, waiting for their turn
     // Decoded image results' blocks, reused once merged (decodeBlock overwrites every value): allocating
@@ -131,6 +135,14 @@ struct Master::JobRuntime {
         taskSeconds += seconds;
         taskCount += tasks;
         if (work.has_image()) taskSpp += work.image().sample_count();
+    }
+    // What a task costs the job's clock beyond its rendering (Pending::transferSeconds and the merge), averaged
+    // over the results merged so far: the budget must hold it too, since the job ends with its last merge.
+    // (A 1024² BDPT job under --time 30 ran 31.0 s on one worker while only the rendering was counted.)
+    double overheadSeconds = 0;
+    int64_t overheadCount = 0;
+    double expectedOverhead() const {
+        return overheadCount > 0 ? overheadSeconds / static_cast<double>(overheadCount) : 0.0;
     }
     // The time one worker is expected to take for image tasks of `spp` samples per pixel in all, or for one
     // chain task; 0 before a result is in.

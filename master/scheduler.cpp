@@ -155,6 +155,7 @@ std::vector<v1::TaskSpec> Master::leaseIndices(JobRuntime &j, WorkerRuntime &w, 
         TaskRuntime &t = j.tasks[static_cast<size_t>(index)];
         t.state = TaskRuntime::State::Leased;
         t.attempt = attempt;
+        t.leased = Clock::now();
         j.attemptTask[attempt] = index;
         j.attemptWorker[attempt] = w.info.id();
         leases_[attempt] = {j.record.id(), index, w.info.id(), Clock::now() + cfg_.leaseTime};
@@ -226,7 +227,7 @@ bool Master::batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTa
     for (size_t i = 0; i < batchTasks; ++i)
         spp += j.tasks[static_cast<size_t>(firstTask) + i].work.image().sample_count();
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
-    return elapsed + j.expectedSeconds(spp) <= j.record.spec().budget().time_seconds();
+    return elapsed + j.expectedSeconds(spp) + j.expectedOverhead() <= j.record.spec().budget().time_seconds();
 }
 
 bool Master::mayIssue(JobRuntime &j) {
@@ -245,7 +246,9 @@ bool Master::mayIssue(JobRuntime &j) {
     // workers at once, the sequence would otherwise hand out tasks far too long for the budget.
     if (j.taskCount == 0 && !j.chain && nextSpp > taskSize(j.record, 0)) return false;
     const double elapsed = (unixMs() - j.record.started_unix_ms()) / 1000.0;
-    double estimate = j.expectedSeconds(nextSpp);
+    // A task ends for the job when it is merged: its transfer and merge come after its rendering.
+    const double overhead = j.expectedOverhead();
+    double estimate = j.expectedSeconds(nextSpp) + overhead;
     if (j.chain && j.film.chain->job->tasksPerPass() > 1 && j.passStartMs > 0)
         estimate = std::max(estimate, (unixMs() - j.passStartMs) / 1000.0);
     const double budget = j.record.spec().budget().time_seconds();
@@ -255,8 +258,8 @@ bool Master::mayIssue(JobRuntime &j) {
     // covers a pixel's whole filter footprint). Without it a 1024² BDPT job, whose tasks are one sample per
     // pixel of about 5 s each, left up to a task's time of its budget unused on every worker.
     if (!j.chain && j.taskCount > 0) {
-        j.partialTiles =
-            timedPartialTiles(budget, elapsed, ImageTask{0, 1}, j.expectedSeconds(1), filmTiles(*j.film.film));
+        j.partialTiles = timedPartialTiles(budget - overhead, elapsed, ImageTask{0, 1}, j.expectedSeconds(1),
+                                           filmTiles(*j.film.film));
         if (j.partialTiles > 0) return true;
     }
     closeTimeBudget(j);

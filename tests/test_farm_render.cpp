@@ -200,6 +200,24 @@ TEST_F(FarmRender, TimeBudgetIssuesWholeTasksThenAPartialOneAndRecordsTheTrueTim
     }
 }
 
+// A timed job ends when its last result is merged, so the budget must hold each task's transfer and merge as
+// well as its rendering. Here every upload is held back by a second, as on a slow link: counted by its
+// rendering alone, the last task was issued as the budget ran out and arrived a second or two after it.
+TEST_F(FarmRender, TimeBudgetHoldsTheTransferOfTheLastTask) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    farm->startMaster();
+    farm->startWorker(1, {"--upload-delay", "1"});
+    const std::string out = farm->dir() + "/timed.exr";
+    const double budget = 5;
+    const auto [code, output] = farm->cli("submit " + scene + " --time 5 --seed 5 --wait -o " + out);
+    ASSERT_EQ(code, 0) << output << farm->master().log();
+    const Bitmap img = readEXR(out);
+    const double seconds = std::stod(img.metadata.at("pathfarm.renderSeconds"));
+    EXPECT_LT(seconds, budget + 0.4) << farm->master().log();
+    EXPECT_GT(seconds, budget - 2.5) << farm->master().log();  // and it still used the budget
+    expectTimedImage(scene, "--seed 5", out);
+}
+
 // A large film under a time budget: before any result tells the job's pace, the workers get only the
 // sequence's smallest tasks (1 spp at 1024²), however many of them ask; afterwards a task is issued only if
 // it is expected to end within the budget. (A 1024² BDPT job under --time 20 ran 52 s when its first task

@@ -46,6 +46,9 @@ int main(int argc, char **argv) {
         ->capture_default_str();
     app.add_flag("--fail-every-task", cfg.failEveryTask, "Test-only fault injection: fail every leased task")
         ->group("");
+    app.add_option("--upload-delay", cfg.uploadDelaySeconds, "Test-only: seconds to wait before each upload")
+        ->check(CLI::Range(0.0, 60.0))
+        ->group("");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError &e) {

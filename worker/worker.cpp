@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <random>
 #include <sstream>
+#include <thread>
 #include <tuple>
 
 #include "cpu_quota.h"
@@ -527,6 +528,8 @@ void Worker::uploadLoop() {
         uploads_.pop_front();
         changed_.notify_all();
         lock.unlock();
+        if (cfg_.uploadDelaySeconds > 0)
+            std::this_thread::sleep_for(std::chrono::duration<double>(cfg_.uploadDelaySeconds));
         const bool delivered = upload(r);
         release(r.attempt);
         for (const int64_t a : r.batch) release(a);

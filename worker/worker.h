@@ -41,6 +41,8 @@ struct WorkerConfig {
     int maxMessageBytes = 4 << 20;  // until the master says otherwise
     // Test-only fault injection: report every leased task as failed without rendering it.
     bool failEveryTask = false;
+    // Test-only: wait this long before each upload, as a slow link to the master would.
+    double uploadDelaySeconds = 0;
 };
 
 class Worker {
