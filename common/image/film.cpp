@@ -66,6 +66,37 @@ void ImageBlock::put(const Vec2 &raster, const Spectrum &value) {
 
 void ImageBlock::splat(const Vec2 &raster, const Spectrum &value) { deposit(raster, value, splat_, false); }
 
+ImageBlock::Footprint ImageBlock::footprint(const Vec2 &raster) const {
+    // The storage spans pixels [lo, hi] per axis, the border included. Work relative to pixel centres.
+    const int loX = ox_ - border_, hiX = ox_ + w_ + border_ - 1;
+    const int loY = oy_ - border_, hiY = oy_ + h_ + border_ - 1;
+    const double r = filter_->radius();
+    const double px = raster.x - 0.5, py = raster.y - 0.5;
+    // Reject far-away samples in floating point first, so that the int conversions below cannot overflow.
+    if (px + r < loX || px - r > hiX || py + r < loY || py - r > hiY) return {0, -1, 0, -1, px, py};
+    return {std::max(loX, ceilInRange(px - r)),
+            std::min(hiX, floorInRange(px + r)),
+            std::max(loY, ceilInRange(py - r)),
+            std::min(hiY, floorInRange(py + r)),
+            px,
+            py};
+}
+
+void ImageBlock::prefetchSplat(const Vec2 &raster) const {
+    if (tiles_ || !filter_ || !std::isfinite(raster.x) || !std::isfinite(raster.y)) return;
+    const Footprint fp = footprint(raster);
+    if (fp.empty()) return;
+    // A footprint row's splat sums are 3 doubles per pixel; one address per 64 bytes and the last one reach every
+    // cache line they touch.
+    const size_t stride = static_cast<size_t>(w_ + 2 * border_), n = 3 * static_cast<size_t>(fp.x1 - fp.x0 + 1);
+    for (int y = fp.y0; y <= fp.y1; ++y) {
+        const double *row = splat_.data() + 3 * (static_cast<size_t>(y - (oy_ - border_)) * stride +
+                                                 static_cast<size_t>(fp.x0 - (ox_ - border_)));
+        for (size_t k = 0; k < n; k += 8) __builtin_prefetch(row + k, 1);
+        __builtin_prefetch(row + n - 1, 1);
+    }
+}
+
 void ImageBlock::deposit(const Vec2 &raster, const Spectrum &value, std::vector<double> &channels, bool weighted) {
     if (!value.isFinite() || !std::isfinite(raster.x) || !std::isfinite(raster.y)) {
         ++invalid_;
@@ -92,17 +123,9 @@ void ImageBlock::deposit(const Vec2 &raster, const Spectrum &value, std::vector<
         add(index(static_cast<int>(x), static_cast<int>(y)), 1.0);
         return;
     }
-    // Work relative to pixel centres.
-    const double r = filter_->radius();
-    const double px = raster.x - 0.5, py = raster.y - 0.5;
-    // Reject far-away samples in floating point first, so that the int conversions below cannot overflow.
-    if (px + r < loX || px - r > hiX || py + r < loY || py - r > hiY) return;
-    const int x0 = std::max(loX, ceilInRange(px - r));
-    const int x1 = std::min(hiX, floorInRange(px + r));
-    const int y0 = std::max(loY, ceilInRange(py - r));
-    const int y1 = std::min(hiY, floorInRange(py + r));
-    if (x0 > x1 || y0 > y1) return;
-
+    const Footprint fp = footprint(raster);
+    if (fp.empty()) return;
+    const auto [x0, x1, y0, y1, px, py] = fp;
     double wx[kMaxTaps], wy[kMaxTaps];
     for (int x = x0; x <= x1; ++x) wx[x - x0] = filter_->eval(x - px);
     for (int y = y0; y <= y1; ++y) wy[y - y0] = filter_->eval(y - py);

@@ -189,9 +189,15 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     const auto finishTile = [&](size_t i) {
         const std::lock_guard<std::mutex> lock(splatMu);
         tileDone[i] = 1;
+        // In list order (the same bits whatever the threads did), with each splat's pixels asked for a few splats
+        // ahead (ImageBlock::prefetchSplat).
+        constexpr size_t kAhead = 8;
         for (; splatted < tiles.size() && tileDone[splatted]; ++splatted) {
-            for (const Splat &sp : splats[splatted])
-                if (sp.value.isFinite()) result.block.splat(sp.raster, sp.value);
+            const SplatList &list = splats[splatted];
+            for (size_t k = 0; k < list.size(); ++k) {
+                if (k + kAhead < list.size()) result.block.prefetchSplat(list[k + kAhead].raster);
+                if (list[k].value.isFinite()) result.block.splat(list[k].raster, list[k].value);
+            }
             SplatList().swap(splats[splatted]);
         }
     };
