@@ -229,11 +229,11 @@ void Master::recoverJob(const StoredJob &stored) {
             v1::ImageTask &batch = *last->second.work.mutable_image();
             batch.set_sample_count(batch.sample_count() + work.image().sample_count());
             ++last->second.tasks;
-            j.countTime(work, 1, 0.0);  // the batch's time came with its first task
+            j.countTime(work, 1, v1::TaskStats());  // the batch's time came with its first task
             continue;
         }
         j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0};
-        if (r.taskIndex >= j.chainFirst) j.countTime(work, 1, r.stats.seconds());
+        if (r.taskIndex >= j.chainFirst) j.countTime(work, 1, r.stats);
     }
     if (j.chain && j.film.chain->job->seeded()) startChains(j);
     spdlog::info("job={}: resumed: {} tasks issued, {} merged in the checkpoint, {} results waiting, {} leases", id,

@@ -114,7 +114,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 leases_.erase(attempts[static_cast<size_t>(i)]);
                 j->retry.erase(task + i);
             }
-            if (task >= j->chainFirst) j->countTime(work, count, stats.seconds());
+            if (task >= j->chainFirst) j->countTime(work, count, stats);
             if (const Clock::time_point leased = j->tasks[static_cast<size_t>(task)].leased;
                 leased != Clock::time_point{})
                 transferSeconds = std::max(0.0, std::chrono::duration<double>(Clock::now() - leased).count() -

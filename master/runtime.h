@@ -130,8 +130,13 @@ struct Master::JobRuntime {
     double taskSeconds = 0;
     int64_t taskCount = 0;
     int64_t taskSpp = 0;  // image jobs
-    void countTime(const pathfarm::v1::TaskSpec &work, int64_t tasks, double seconds) {
+    // Image jobs: the tiles' rendering times of the last whole task that reported them (TaskStats.tile_seconds),
+    // which size the partial task by what the film's first tiles cost.
+    std::vector<float> tileSeconds;
+    void countTime(const pathfarm::v1::TaskSpec &work, int64_t tasks, const pathfarm::v1::TaskStats &stats) {
         if (work.has_image() && work.image().tiles() > 0) return;  // a partial task: the last one anyway
+        const double seconds = stats.seconds();
+        if (stats.tile_seconds_size() > 0) tileSeconds.assign(stats.tile_seconds().begin(), stats.tile_seconds().end());
         taskSeconds += seconds;
         taskCount += tasks;
         if (work.has_image()) taskSpp += work.image().sample_count();

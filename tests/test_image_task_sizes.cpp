@@ -137,5 +137,23 @@ TEST(TimedPassSizes, APartialPassTakesTheTilesThatFit) {
     EXPECT_EQ(timedPartialTiles(30.0, 29.75, ImageTask{16, 8}, 4.0, 64), 32);
 }
 
+// With the last pass's tile times, the first tiles cost their share of it: 4 tiles of a 4 s pass, the first two
+// twice as costly as the others (4/6 of the pass: 2.67 s together), so 2 s left holds one of them, where the
+// average (1 s a tile) would take two; cheap tiles first, the same 2 s holds three. Times that do not match the
+// film's tiles, or sum to nothing, fall back to the average.
+TEST(TimedPassSizes, APartialPassIsSizedByWhatItsTilesCost) {
+    const ImageTask last{4, 1};
+    const std::vector<float> costlyFirst = {2, 2, 1, 1}, cheapFirst = {1, 1, 2, 2};
+    EXPECT_EQ(timedPartialTiles(30.0, 28.0, last, 4.0, 4), 2);
+    EXPECT_EQ(timedPartialTiles(30.0, 28.0, last, 4.0, 4, costlyFirst), 1);
+    EXPECT_EQ(timedPartialTiles(30.0, 28.0, last, 4.0, 4, cheapFirst), 2);
+    EXPECT_EQ(timedPartialTiles(30.0, 27.5, last, 4.0, 4, cheapFirst), 2);  // 2.5 s: not the third (2.67 s)
+    EXPECT_EQ(timedPartialTiles(30.0, 27.0, last, 4.0, 4, cheapFirst), 3);  // 3 s: the first three, never all four
+    EXPECT_EQ(timedPartialTiles(30.0, 26.0, last, 4.0, 4, cheapFirst), 3);
+    EXPECT_EQ(timedPartialTiles(30.0, 29.5, last, 4.0, 4, costlyFirst), 0);  // 0.5 s: not even the first (1.33 s)
+    EXPECT_EQ(timedPartialTiles(30.0, 28.0, last, 4.0, 4, std::vector<float>{1, 1}), 2);
+    EXPECT_EQ(timedPartialTiles(30.0, 28.0, last, 4.0, 4, std::vector<float>(4, 0.0f)), 2);
+}
+
 }  // namespace
 }  // namespace pf::test

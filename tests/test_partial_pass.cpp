@@ -24,6 +24,20 @@ constexpr int kRes = 64, kTile = 8;
 
 bool coveredPixel(int x, int y, int64_t tiles) { return (y / kTile) * (kRes / kTile) + x / kTile < tiles; }
 
+// A task reports each tile's rendering time in the film's tile order (what sizes a partial pass), and a partial
+// task only its own tiles'.
+TEST(PartialPass, ATaskReportsItsTilesTimes) {
+    auto scene = loadScene((std::filesystem::path(PATHFARM_SOURCE_DIR) / "scenes/cornell-box/scene.xml").string());
+    scene->resizeFilm(kRes, kRes);
+    const auto path = createIntegrator("path", scene->integratorProperties(), false);
+    const ImageTaskResult whole = runImageTask(*scene, sampling(*path), 5, ImageTask{0, 1}, 2);
+    ASSERT_EQ(whole.tileSeconds.size(), static_cast<size_t>(filmTiles(scene->sensor().film())));
+    for (const float s : whole.tileSeconds) EXPECT_GT(s, 0.0f);
+    const ImageTaskResult part = runImageTask(*scene, sampling(*path), 5, ImageTask{1, 1, 20}, 2);
+    ASSERT_EQ(part.tileSeconds.size(), size_t{20});
+    for (const float s : part.tileSeconds) EXPECT_GT(s, 0.0f);
+}
+
 TEST(PartialPass, PixelsWithAWhollyCoveredFootprintGetTheSampleAndTheOthersKeepTheirBits) {
     // cornell-box as shipped: the tent filter reaches one pixel beyond a sample's own.
     auto scene = loadScene((std::filesystem::path(PATHFARM_SOURCE_DIR) / "scenes/cornell-box/scene.xml").string());

@@ -336,9 +336,18 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
             run.rays += image->rays;
             run.seconds += image->seconds;
             run.loadSeconds += loadSeconds;
+            for (size_t k = 0; k < run.tileSeconds.size() && k < image->tileSeconds.size(); ++k)
+                run.tileSeconds[k] += image->tileSeconds[k];
         } else {
             sum.emplace(std::move(image->block));
-            run = Result{task.attempt_id(), {}, {}, image->samples, image->rays, image->seconds, loadSeconds};
+            run = Result{task.attempt_id(),
+                         {},
+                         {},
+                         image->samples,
+                         image->rays,
+                         image->seconds,
+                         loadSeconds,
+                         std::move(image->tileSeconds)};
         }
     }
     flush();
@@ -365,7 +374,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
     const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
     if ((task.has_seeding() || task.has_chain() || task.image().direct()) && !chain)
         throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no seeding or chain tasks");
-    Result r{task.attempt_id(), {}, {}, 0, 0, 0, 0};
+    Result r{task.attempt_id(), {}, {}, 0, 0, 0, 0, {}};
     if (task.has_seeding()) {
         // The job's spp budget, as the master's ChainJob saw it (0: a time budget or the scene's sampleCount).
         const int64_t spp = task.job().budget().kind_case() == v1::Budget::kSpp ? task.job().budget().spp() : 0;
@@ -377,9 +386,10 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
         r.payload = farm::encodeChainResult(c);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(c.mutations, c.rays, c.seconds);
     } else if (task.has_image()) {
-        const ImageTaskResult i = renderImage(p, task, threads);
+        ImageTaskResult i = renderImage(p, task, threads);
         r.payload = farm::encodeBlock(i.block);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(i.samples, i.rays, i.seconds);
+        r.tileSeconds = std::move(i.tileSeconds);
     } else {
         throw std::runtime_error("this worker cannot run the task kind it was given");
     }
@@ -476,6 +486,7 @@ bool Worker::upload(const Result &r) {
         h->mutable_stats()->set_rays(r.rays);
         h->mutable_stats()->set_seconds(r.seconds);
         h->mutable_stats()->set_scene_load_seconds(r.loadSeconds);
+        h->mutable_stats()->mutable_tile_seconds()->Add(r.tileSeconds.begin(), r.tileSeconds.end());
         h->set_payload_size(payload.size());
         h->set_payload_hash(hash);
         // A refused stream stops accepting writes; Finish() then says why.

@@ -36,6 +36,7 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
     uint64_t samples = 0;  // pixel samples taken, which is also the light paths BDPT traced
     ImageTask last{0, 0};
     double lastTaskSeconds = 0;
+    std::vector<float> lastTileSeconds;
     for (bool partial = false; !partial;) {
         const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
         // A time budget's passes are sized by the clock, a sample budget's by the fixed sequence the farm
@@ -44,8 +45,9 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
         ImageTask task{done, timed ? timedPassSize(opt.timeLimit, elapsed, last, lastTaskSeconds)
                                    : imageTaskSize(targetSpp, done, pixels)};
         if (task.sampleCount <= 0 && timed) {
-            task =
-                ImageTask{done, 1, timedPartialTiles(opt.timeLimit, elapsed, last, lastTaskSeconds, filmTiles(film))};
+            task = ImageTask{
+                done, 1,
+                timedPartialTiles(opt.timeLimit, elapsed, last, lastTaskSeconds, filmTiles(film), lastTileSeconds)};
             partial = true;
         }
         if (task.sampleCount <= 0 || task.tiles == 0) break;
@@ -62,6 +64,7 @@ Bitmap SamplingIntegrator::render(const Scene &scene, const RenderOptions &opt, 
         stats.rays += r.rays;
         last = task;
         lastTaskSeconds = r.seconds;
+        lastTileSeconds = std::move(r.tileSeconds);
 
         const double total = std::chrono::duration<double>(Clock::now() - start).count();
         char label[64];

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <numeric>
 #include <thread>
 #include <vector>
 
@@ -147,11 +148,22 @@ int64_t imageTaskSize(int64_t spp, int64_t firstSample, int64_t pixels) {
     return std::min(size, spp - firstSample);
 }
 
-int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles) {
+int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles,
+                          std::span<const float> tileSeconds) {
     if (last.sampleCount <= 0 || !(lastSeconds > 0) || tiles <= 0) return 0;
-    const double perTile = lastSeconds / static_cast<double>(last.sampleCount) / static_cast<double>(tiles);
-    const double fits = std::floor((budget - elapsed) / perTile);
-    return fits >= 1 ? static_cast<int64_t>(std::min(fits, static_cast<double>(tiles - 1))) : 0;
+    const double perSample = lastSeconds / static_cast<double>(last.sampleCount), left = budget - elapsed;
+    const double total = std::accumulate(tileSeconds.begin(), tileSeconds.end(), 0.0);
+    if (tileSeconds.size() != static_cast<size_t>(tiles) || !(total > 0)) {
+        const double fits = std::floor(left / (perSample / static_cast<double>(tiles)));
+        return fits >= 1 ? static_cast<int64_t>(std::min(fits, static_cast<double>(tiles - 1))) : 0;
+    }
+    // The largest n whose tiles' share of a sample per pixel fits.
+    int64_t n = 0;
+    for (double share = 0; n < tiles - 1; ++n) {
+        share += tileSeconds[static_cast<size_t>(n)] / total;
+        if (perSample * share > left) break;
+    }
+    return n;
 }
 
 int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, double lastSeconds) {
@@ -182,6 +194,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
     // and freed as soon as every tile before it is done, so only the tiles in flight hold theirs (kept to
     // the end, a 1024² BDPT task of 8 spp held over 1 GB of them, and one of 256 spp would hold ~30 GB).
     ImageTaskResult result{makeFilmBlock(scene)};
+    result.tileSeconds.assign(tiles.size(), 0.0f);
     std::vector<SplatList> splats(tiles.size());
     std::vector<char> tileDone(tiles.size(), 0);
     size_t splatted = 0;  // tiles whose splats are in result.block
@@ -209,6 +222,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
             makePixelSampler(sequence ? *sequence : scene.sensor().sampleSequence(), film.width(), film.height());
         PixelSampler &sampler = *pixelSampler;
         for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
+            const auto tileStart = std::chrono::steady_clock::now();
             const Tile &t = tiles[i];
             for (int y = t.y; y < t.y + t.h; ++y)
                 for (int x = t.x; x < t.x + t.w; ++x) {
@@ -223,6 +237,7 @@ ImageTaskResult runImageTask(const Scene &scene, const SamplingIntegrator &integ
                         blocks[i].put(raster, L);
                     }
                 }
+            result.tileSeconds[i] = std::chrono::duration<float>(std::chrono::steady_clock::now() - tileStart).count();
             finishTile(i);
         }
         rays.fetch_add(Scene::threadRayCount() - rays0);

@@ -5,6 +5,7 @@
 // task order gives the same bits wherever the tasks ran.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct ImageTaskResult {
     uint64_t pixels = 0;   // pixels whose samples were taken (fewer than the film's in a partial pass)
     uint64_t rays = 0;
     double seconds = 0;
+    // Each tile's rendering time (one thread's), in the film's tile order: what a partial pass of the first tiles
+    // costs (timedPartialTiles).
+    std::vector<float> tileSeconds = {};
 };
 
 // Runs the task on `threads` threads. Tiles are rendered in any order but merged in a fixed order. The pixel
@@ -58,8 +62,11 @@ int64_t timedPassSize(double budget, double elapsed, const ImageTask &last, doub
 // The tiles of one sample per pixel that the time left holds at the pace of the pass `last` (which took
 // `lastSeconds`), out of `tiles` (never all of them: that would be a whole pass); 0 when not one does. At 1024²,
 // one sample per pixel of BDPT takes about 5 s on two cores, and whole passes alone left 4.9 s of a 30 s budget
-// unused on cornell-box.
-int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles);
+// unused on cornell-box. With `tileSeconds` (that pass's ImageTaskResult::tileSeconds, one per tile) the first n
+// tiles cost their share of the pass, not n / tiles of it: tiles differ (the first 367 of cornell-box's 1024 at
+// 1024² cost BDPT 29% more than the average tile, and a farm job sized by the average ended 0.33 s late).
+int64_t timedPartialTiles(double budget, double elapsed, const ImageTask &last, double lastSeconds, int64_t tiles,
+                          std::span<const float> tileSeconds = {});
 
 // The film's pixels as imageTaskSize counts them.
 int64_t filmPixels(const Film &film);
