@@ -135,9 +135,8 @@ struct Master::JobRuntime {
     std::vector<float> tileSeconds;
     void countTime(const pathfarm::v1::TaskSpec &work, int64_t tasks, const pathfarm::v1::TaskStats &stats) {
         if (work.has_image() && work.image().tiles() > 0) return;  // a partial task: the last one anyway
-        const double seconds = stats.seconds();
         if (stats.tile_seconds_size() > 0) tileSeconds.assign(stats.tile_seconds().begin(), stats.tile_seconds().end());
-        taskSeconds += seconds;
+        taskSeconds += stats.seconds();
         taskCount += tasks;
         if (work.has_image()) taskSpp += work.image().sample_count();
     }

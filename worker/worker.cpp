@@ -340,14 +340,8 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
                 run.tileSeconds[k] += image->tileSeconds[k];
         } else {
             sum.emplace(std::move(image->block));
-            run = Result{task.attempt_id(),
-                         {},
-                         {},
-                         image->samples,
-                         image->rays,
-                         image->seconds,
-                         loadSeconds,
-                         std::move(image->tileSeconds)};
+            run = Result{task.attempt_id(), {}, {}, image->samples, image->rays, image->seconds, loadSeconds};
+            run.tileSeconds = std::move(image->tileSeconds);
         }
     }
     flush();
@@ -374,7 +368,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
     const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
     if ((task.has_seeding() || task.has_chain() || task.image().direct()) && !chain)
         throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no seeding or chain tasks");
-    Result r{task.attempt_id(), {}, {}, 0, 0, 0, 0, {}};
+    Result r{task.attempt_id(), {}, {}, 0, 0, 0, 0};
     if (task.has_seeding()) {
         // The job's spp budget, as the master's ChainJob saw it (0: a time budget or the scene's sampleCount).
         const int64_t spp = task.job().budget().kind_case() == v1::Budget::kSpp ? task.job().budget().spp() : 0;

@@ -67,8 +67,8 @@ private:
         std::string payload;         // by task kind (see TaskSpec in common.proto)
         uint64_t samples, rays;
         double seconds;
-        double loadSeconds;              // preparing the scene for this task
-        std::vector<float> tileSeconds;  // image tasks: ImageTaskResult::tileSeconds, summed over a batch
+        double loadSeconds;                   // preparing the scene for this task
+        std::vector<float> tileSeconds = {};  // image tasks: ImageTaskResult::tileSeconds, summed over a batch
     };
     struct Prepared {
         std::string key;
