@@ -11,8 +11,9 @@
 # cost (loading, kd-tree, seeding) from the cost per sample, and the final render gets the count that fills
 # SECONDS. The scene is rendered from a
 # rewritten copy (integrator type, sampleCount, film width and height = RES, scene version 0.6.0, ldrfilm
-# as hdrfilm; the scene's other files are linked), so the file itself is untouched and pathfarm renders it
-# as it is. Prints the count and the measured wall time; compare with
+# as hdrfilm; for mlt/pssmlt/erpt the sampler becomes `independent`, the only one Mitsuba's chains accept; the
+# scene's other files are linked), so the file itself is untouched and pathfarm renders it as it is. A render
+# that writes no image (Mitsuba 0.6 exits with 0 when its render job throws) stops the script with its log. Prints the count and the measured wall time; compare with
 #   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
 #       --reference REF.exr --image mitsuba=OUT.exr SCENE.xml
 # Same work instead of equal time: with MITSUBA_COUNT=N set, the script renders exactly N samples (or mutations)
@@ -44,6 +45,11 @@ xml = open(src).read()
 xml = re.sub(r'<integrator\s+type="[^"]*"', f'<integrator type="{integrator}"', xml, count=1)
 xml = re.sub(r'(<integer\s+name="sampleCount"\s+value=")[^"]*"', rf'\g<1>{count}"', xml)
 xml = re.sub(r'(<integer\s+name="(?:width|height)"\s+value=")[^"]*"', rf'\g<1>{res}"', xml)
+# Mitsuba 0.6's Markov-chain integrators refuse any sampler but `independent` ("Metropolis light transport requires
+# the independent sampler"); pathfarm's chains draw independent numbers whatever the file asks, so both renderers
+# then draw the same kind of numbers.
+if integrator in ("mlt", "pssmlt", "erpt"):
+    xml = re.sub(r'<sampler\s+type="[^"]*"', '<sampler type="independent"', xml, count=1)
 # Mitsuba 0.6 refuses 0.5.0 files (its upgrade stylesheet only bumps the version), and an ldrfilm writes no
 # EXR: the film becomes an hdrfilm without the ldrfilm's own properties.
 xml = xml.replace('version="0.5.0"', 'version="0.6.0"').replace('type="ldrfilm"', 'type="hdrfilm"')
@@ -56,8 +62,12 @@ PY
 timed() {
     local start end
     start=$(date +%s.%N)
+    rm -f "$2"
     "$MITSUBA" -q -p "$THREADS" -o "$2" "$WORK/scene-$1.xml" >"$WORK/log-$1" 2>&1 ||
         { cat "$WORK/log-$1" >&2; echo "error: mitsuba failed on $SCENE" >&2; exit 1; }
+    # Mitsuba exits with 0 when the render job throws (e.g. an integrator that refuses the sampler); only the
+    # missing image tells.
+    [ -s "$2" ] || { cat "$WORK/log-$1" >&2; echo "error: mitsuba wrote no image for $SCENE ($INTEGRATOR)" >&2; exit 1; }
     end=$(date +%s.%N)
     python3 -c "print($end - $start)"
 }
