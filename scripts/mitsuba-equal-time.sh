@@ -11,9 +11,10 @@
 # cost (loading, kd-tree, seeding) from the cost per sample, and the final render gets the count that fills
 # SECONDS. The scene is rendered from a
 # rewritten copy (integrator type, sampleCount, film width and height = RES, scene version 0.6.0, ldrfilm
-# as hdrfilm; for mlt/pssmlt/erpt the sampler becomes `independent`, the only one Mitsuba's chains accept; the
-# scene's other files are linked), so the file itself is untouched and pathfarm renders it as it is. A render
-# that writes no image (Mitsuba 0.6 exits with 0 when its render job throws) stops the script with its log. Prints the count and the measured wall time; compare with
+# as hdrfilm; for mlt/pssmlt/erpt the sampler becomes `independent`, which Mitsuba's mlt and pssmlt require and
+# which pathfarm's chains draw whatever the file asks; the scene's other files are linked), so the file itself
+# is untouched and pathfarm renders it as it is. A render that writes no image (Mitsuba 0.6 exits with 0 when
+# its render job throws) stops the script with its log. Prints the count and the measured wall time; compare with
 #   bench_per_sample --res RES --time SECONDS --threads THREADS --integrators INTEGRATOR \
 #       --reference REF.exr --image mitsuba=OUT.exr SCENE.xml
 # Same work instead of equal time: with MITSUBA_COUNT=N set, the script renders exactly N samples (or mutations)
@@ -45,9 +46,9 @@ xml = open(src).read()
 xml = re.sub(r'<integrator\s+type="[^"]*"', f'<integrator type="{integrator}"', xml, count=1)
 xml = re.sub(r'(<integer\s+name="sampleCount"\s+value=")[^"]*"', rf'\g<1>{count}"', xml)
 xml = re.sub(r'(<integer\s+name="(?:width|height)"\s+value=")[^"]*"', rf'\g<1>{res}"', xml)
-# Mitsuba 0.6's Markov-chain integrators refuse any sampler but `independent` ("Metropolis light transport requires
-# the independent sampler"); pathfarm's chains draw independent numbers whatever the file asks, so both renderers
-# then draw the same kind of numbers.
+# Mitsuba 0.6's mlt and pssmlt refuse any sampler but `independent` ("Metropolis light transport requires the
+# independent sampler"); pathfarm's chains, erpt's included, draw independent numbers whatever the file asks, so
+# both renderers then draw the same kind of numbers.
 if integrator in ("mlt", "pssmlt", "erpt"):
     xml = re.sub(r'<sampler\s+type="[^"]*"', '<sampler type="independent"', xml, count=1)
 # Mitsuba 0.6 refuses 0.5.0 files (its upgrade stylesheet only bumps the version), and an ldrfilm writes no
