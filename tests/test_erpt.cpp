@@ -44,7 +44,7 @@ TEST_P(ERPTInterleavedPasses, AgreeWithBDPT) {
     const std::vector<std::pair<std::string, std::string>> params = {
         {"directSamples", "-1"}, {"chainLength", "400"}, {"passMutations", "512"}};
     auto scene = loadMLTTestScene(GetParam(), 16, 32);
-    ASSERT_EQ(dynamic_cast<const ERPT &>(*makeTestIntegrator(*scene, "erpt", params)).plan(*scene, 0).interleave, 7u);
+    ASSERT_EQ(dynamic_cast<const ERPT &>(*makeTestIntegrator(*scene, "erpt", params)).plan(*scene, 32).interleave, 7u);
     expectConvergence(GetParam(), "erpt", params, ConvergenceSetup{}, GetParam() + " erpt, interleaved passes");
 }
 
@@ -261,11 +261,22 @@ TEST(ERPTParameters, MitsubaNamesAndChecks) {
     // numChains is per pixel over all of them (Mitsuba: numChains w / (W sampleCount) per seed).
     const auto erpt = makeTestIntegrator(*scene, "erpt", {{"numChains", "2.0"}, {"luminanceSamples", "500"}});
     const auto &e = dynamic_cast<const ERPT &>(*erpt);
-    EXPECT_EQ(e.plan(*scene, 0).chainsPerPixel, 0.5);
+    EXPECT_EQ(e.plan(*scene, 4).chainsPerPixel, 0.5);
     EXPECT_EQ(e.plan(*scene, 16).chainsPerPixel, 0.125);
     EXPECT_EQ(e.chainTaskCount(*scene, 16), 16 * e.plan(*scene, 16).tasksPerRound());
     ASSERT_EQ(e.seedingTasks(*scene).size(), 1u);
     EXPECT_EQ(e.seedingTasks(*scene)[0].pilotSamples, 500u);
+    // A time budget plans numChains rounds (rounded down, at least one, at most the sampleCount), so that a seed
+    // sample launches at least one burst on average where numChains allows: seeds are BDPT samples, dearer than
+    // mutations. Its plan is that of a render of those rounds, and the direct component keeps their pace.
+    for (const auto &[numChains, rounds] :
+         std::vector<std::pair<std::string, int64_t>>{{"2.0", 2}, {"1.0", 1}, {"0.25", 1}, {"3.9", 3}, {"64.0", 4}}) {
+        const auto timed = makeTestIntegrator(*scene, "erpt", {{"numChains", numChains}});
+        const auto &t = dynamic_cast<const ERPT &>(*timed);
+        EXPECT_EQ(t.timeBudgetPlan(*scene), rounds) << numChains;
+        EXPECT_EQ(t.plan(*scene, 0).chainsPerPixel, t.plan(*scene, rounds).chainsPerPixel) << numChains;
+        EXPECT_EQ(t.plan(*scene, 0).interleave, t.plan(*scene, rounds).interleave) << numChains;
+    }
 }
 
 }  // namespace

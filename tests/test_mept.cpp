@@ -74,7 +74,7 @@ class MEPTTimeBudget : public ::testing::TestWithParam<Case> {};
 TEST_P(MEPTTimeBudget, AgreesWithBDPT) {
     const Case &c = GetParam();
     ConvergenceSetup s = timeBudgetSetup(1.0, c.maxDepth);
-    s.budget = c.budget;  // the scene's sampleCount: the rounds a time budget's passes are planned for
+    s.budget = c.budget;  // the scene's sampleCount, which bounds the rounds (numChains) a time budget plans
     auto params = singleMutation(MutationType::Manifold);
     params.emplace_back("numChains", std::to_string(c.chains) + ".0");
     expectConvergence(c.scene, "erpt", params, s, c.scene + " mept --time 1");
@@ -276,8 +276,8 @@ TEST(ManifoldExploration, PathsSeenThroughGlassInAMediumMoveOnTheFilm) {
 
 // A time budget is spent in whole passes, so their size is the step by which a timed render misses its
 // budget: with the manifold perturbation (1.7-3.2 times dearer per mutation than Veach's perturbations) the
-// default pass holds kManifoldPassMutations, not erpt's 2^20, at the scene's own size (1024², 64 rounds) as at
-// 64². An explicit passMutations still rules.
+// default pass holds kManifoldPassMutations, not erpt's 2^20, at the scene's own size (1024²; a time budget plans
+// one round there, numChains being 1) as at 64². An explicit passMutations still rules.
 TEST(MEPTPlan, ManifoldPassesAreSmallerThanErpts) {
     const auto passMutations = [](const Scene &scene, const std::string &name,
                                   const std::vector<std::pair<std::string, std::string>> &params) {

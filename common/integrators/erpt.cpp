@@ -44,8 +44,15 @@ std::vector<SeedingTask> ERPT::seedingTasks(const Scene &) const {
     return {SeedingTask{0, 0, static_cast<uint64_t>(luminanceSamples_)}};
 }
 
+int64_t ERPT::timeBudgetPlan(const Scene &scene) const {
+    // numChains is positive and finite (checked at construction).
+    const double rounds =
+        std::min(std::floor(numChains_), static_cast<double>(std::max(1, scene.sensor().sampleCount())));
+    return std::max<int64_t>(1, static_cast<int64_t>(rounds));
+}
+
 BurstPlan ERPT::plan(const Scene &scene, int64_t spp) const {
-    const int64_t rounds = spp > 0 ? spp : std::max(1, scene.sensor().sampleCount());
+    const int64_t rounds = spp > 0 ? spp : timeBudgetPlan(scene);
     return burstPlan(scene, numChains_ / static_cast<double>(rounds), chainLength_, passMutations_);
 }
 

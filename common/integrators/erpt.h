@@ -66,9 +66,16 @@ public:
     // The mean over whole passes: 1 / passes (blocks / tasks while a pass is under way, for previews).
     double chainImageScale(const Scene &scene, int64_t spp, const ChainImage &image, double luminance) const override;
 
-    // The passes of a render of `spp` rounds (0: a time budget, whose rounds are those of the scene's
-    // sampleCount): Mitsuba's numChains bursts per pixel over the whole render are numChains / rounds per
-    // round.
+    // The rounds a time budget's passes are planned for: numChains rounded down, at least 1 and at most the
+    // scene's sampleCount, so that a seed sample launches at least one burst on average where numChains allows.
+    // Not the sampleCount itself (as for a render of it), since a seed is a BDPT sample, which costs several
+    // mutations: cornell-box as shipped (sampleCount 64, numChains 1) at 1024² spent 54% of an `erpt --time` render
+    // in BDPT seeds for 1.6 mutations each, and made 20 mutations per pixel in 144 s, where 1 round made 100 in
+    // 128 s. The same chains per pixel over the plan (numChains) as a render of sampleCount, and so the same pace
+    // of the direct component.
+    int64_t timeBudgetPlan(const Scene &scene) const override;
+    // The passes of a render of `spp` rounds (0: a time budget, whose rounds are timeBudgetPlan's): Mitsuba's
+    // numChains bursts per pixel over the whole render are numChains / rounds per round.
     BurstPlan plan(const Scene &scene, int64_t spp) const;
     // The expected number of chains nu of a seed of weight `candidateWeight` (one sample's) when the mean
     // pixel luminance is `meanLuminance` and a round launches `chainsPerPixel` bursts per pixel on average

@@ -3,7 +3,8 @@
 // canonical measure (path/mutation.h; ALGORITHMS.md §2.2), and a transition selects one of the enabled
 // mutations with probability proportional to applicability and draws a proposal from it. The core
 // (mcmc/metropolis.h) accepts, and records with expected values; deposits are f / pi at the path's raster
-// position (ALGORITHMS.md §2.2), unfiltered like every chain deposit.
+// position (ALGORITHMS.md §2.2), a splat like every chain deposit (spread by the film's filter, not divided by its
+// weights).
 #pragma once
 #include "image/film.h"
 #include "mcmc/metropolis.h"

@@ -129,6 +129,8 @@ uint64_t chainTaskMutations(const Scene &scene, uint64_t most) {
 
 uint64_t ChainIntegrator::taskMutations(const Scene &scene) const { return chainTaskMutations(scene); }
 
+int64_t ChainIntegrator::timeBudgetPlan(const Scene &scene) const { return std::max(1, scene.sensor().sampleCount()); }
+
 SeedingResult ChainIntegrator::runSeeding(const Scene &scene, int64_t spp, uint64_t seed,
                                           const SeedingTask &task) const {
     return runSeedingTask(scene, seeding(scene, spp), seed, task);

@@ -73,6 +73,9 @@ public:
     virtual void runChain(const Scene &scene, uint64_t jobSeed, const ChainTask &task, const ChainSeed &seed,
                           double scale, PCG32 &rng, ImageBlock &film, MutationCounts &counts,
                           ChainCounters &counters) const = 0;
+    // The budget (as `spp`) whose passes a time budget runs, as far as the clock allows, and whose pace the direct
+    // component keeps under it (render/chain_job.h): the scene's sampleCount.
+    virtual int64_t timeBudgetPlan(const Scene &scene) const;
     // The component rendered without chains (Mitsuba's directSamples), its samples per pixel; null if none.
     virtual const SamplingIntegrator *directIntegrator() const { return nullptr; }
     virtual int64_t directSamples() const { return 0; }

@@ -31,9 +31,9 @@ ChainJob::ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64
       direct_(makeFilmBlock(scene)),
       chains_(makeFilmBlock(scene)) {
     if (integrator.directIntegrator() && integrator.directSamples() > 0) directSamples_ = integrator.directSamples();
-    // The pace of the direct component: its samples spread over the passes of the budget, or of a render
-    // of the scene's sampleCount under a time budget.
-    const int64_t paceSpp = spp > 0 ? spp : std::max(1, scene.sensor().sampleCount());
+    // The pace of the direct component: its samples spread over the passes of the budget, or of the budget a
+    // time budget's passes are planned for.
+    const int64_t paceSpp = spp > 0 ? spp : integrator.timeBudgetPlan(scene);
     pacePasses_ =
         std::max<uint64_t>(1, integrator.chainTaskCount(scene, paceSpp) / integrator.tasksPerPass(scene, paceSpp));
 }
