@@ -121,7 +121,10 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                                                     stats.seconds() - stats.scene_load_seconds());
             if (const auto w = workers_.find(worker); w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
-                for (const int64_t a : attempts) wr.attempts.erase(a);
+                for (const int64_t a : attempts) {
+                    wr.attempts.erase(a);
+                    wr.delivered.insert(a);
+                }
                 wr.info.set_tasks_completed(wr.info.tasks_completed() + count);
                 (work.has_chain() ? wr.mutationSeconds : wr.renderSeconds) += stats.seconds();
                 (work.has_chain() ? wr.mutations : wr.samples) += stats.samples();

@@ -169,6 +169,10 @@ struct Master::WorkerRuntime {
     Clock::time_point lastSeen;
     bool draining = false;
     std::set<int64_t> attempts;
+    // Attempts whose results were accepted since the worker's last heartbeat. The worker lists an attempt in its
+    // heartbeats until its upload's reply reaches it, so a heartbeat may cross the accepted result: those attempts
+    // are done, not lost, and the next heartbeat forgets them.
+    std::set<int64_t> delivered;
     // Completed tasks in their two units: pixel samples (image and seeding tasks), mutations (chains).
     double renderSeconds = 0, mutationSeconds = 0;
     uint64_t samples = 0, mutations = 0;

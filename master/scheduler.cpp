@@ -281,10 +281,11 @@ std::vector<int64_t> Master::heartbeat(const std::string &worker, const std::vec
         const auto l = leases_.find(a);
         if (l != leases_.end() && l->second.worker == worker) {
             l->second.deadline = Clock::now() + cfg_.leaseTime;
-        } else {
+        } else if (!w.delivered.count(a)) {
             lost.push_back(a);
         }
     }
+    w.delivered.clear();
     if (w.info.state() == v1::WORKER_LOST) w.info.set_state(v1::WORKER_IDLE);
     return lost;
 }

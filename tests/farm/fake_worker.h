@@ -65,6 +65,15 @@ public:
         lastError_ = s.error_message();
         return reply;
     }
+    // A heartbeat holding `attempts`: the ones the master answers are lost.
+    std::vector<int64_t> heartbeat(const std::vector<int64_t> &attempts) {
+        pathfarm::v1::HeartbeatRequest req;
+        req.set_worker_id(id_);
+        for (const int64_t a : attempts) req.add_attempt_ids(a);
+        pathfarm::v1::HeartbeatReply reply;
+        EXPECT_TRUE(stub_->Heartbeat(ctx().get(), req, &reply).ok());
+        return {reply.lost_attempt_ids().begin(), reply.lost_attempt_ids().end()};
+    }
     const std::string &lastError() const { return lastError_; }
 
 private:
