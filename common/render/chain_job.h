@@ -9,8 +9,8 @@
 // Why the direct component is interleaved: at 1024² its 16 samples per pixel take minutes, so rendered
 // up front it would swallow a time budget before the first chain ran. Spread over the passes, the direct
 // samples issued after pass k are ceil((k + 1) · D / P) of D, P the passes of the render (under a time
-// budget, of a render of the scene's sampleCount; past those, the direct component keeps that pace), at
-// least one. A pass is the unit a time budget stops at (ChainIntegrator::tasksPerPass); any whole number
+// budget, of a render of the budget it plans, ChainIntegrator::timeBudgetPlan; past those, the direct component
+// keeps that pace), at least one. A pass is the unit a time budget stops at (ChainIntegrator::tasksPerPass); any whole number
 // of direct samples and of passes gives an unbiased image.
 #pragma once
 #include <cstdint>
@@ -46,7 +46,7 @@ public:
     uint64_t seedingTaskCount() const { return seedingTasks_.size(); }
     uint64_t firstChainTask() const { return seedingTaskCount(); }
     // The direct component's samples per pixel in a render of the budget (under a time budget: in one of
-    // the scene's sampleCount); 0 when there is none.
+    // the budget it plans); 0 when there is none.
     int64_t directSamples() const { return directSamples_; }
     const SeedingTask &seedingTask(uint64_t task) const { return seedingTasks_.at(task); }
     const SeedingConfig &seedingConfig() const { return config_; }
