@@ -255,9 +255,9 @@ bool Master::mayIssue(JobRuntime &j) {
     if (elapsed + estimate <= budget) return true;
     // An image job whose next whole task no longer fits ends with a partial one: one sample in as many of the
     // film's tiles as the time left holds at one worker's pace, by what those tiles cost in the last whole task
-    // (render/image_task.h; the merger adds it where it
-    // covers a pixel's whole filter footprint). Without it a 1024² BDPT job, whose tasks are one sample per
-    // pixel of about 5 s each, left up to a task's time of its budget unused on every worker.
+    // (render/image_task.h; the merger adds it where it covers a pixel's whole filter footprint). Without it a
+    // 1024² BDPT job, whose tasks are one sample per pixel of about 5 s each, left up to a task's time of its
+    // budget unused on every worker.
     if (!j.chain && j.taskCount > 0) {
         j.partialTiles = timedPartialTiles(budget - overhead, elapsed, ImageTask{0, 1}, j.expectedSeconds(1),
                                            filmTiles(*j.film.film), j.tileSeconds);

@@ -68,7 +68,11 @@ timed() {
         { cat "$WORK/log-$1" >&2; echo "error: mitsuba failed on $SCENE" >&2; exit 1; }
     # Mitsuba exits with 0 when the render job throws (e.g. an integrator that refuses the sampler); only the
     # missing image tells.
-    [ -s "$2" ] || { cat "$WORK/log-$1" >&2; echo "error: mitsuba wrote no image for $SCENE ($INTEGRATOR)" >&2; exit 1; }
+    if [ ! -s "$2" ]; then
+        cat "$WORK/log-$1" >&2
+        echo "error: mitsuba wrote no image for $SCENE ($INTEGRATOR)" >&2
+        exit 1
+    fi
     end=$(date +%s.%N)
     python3 -c "print($end - $start)"
 }

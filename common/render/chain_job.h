@@ -9,9 +9,9 @@
 // Why the direct component is interleaved: at 1024² its 16 samples per pixel take minutes, so rendered
 // up front it would swallow a time budget before the first chain ran. Spread over the passes, the direct
 // samples issued after pass k are ceil((k + 1) · D / P) of D, P the passes of the render (under a time
-// budget, of a render of the budget it plans, ChainIntegrator::timeBudgetPlan; past those, the direct component
-// keeps that pace), at least one. A pass is the unit a time budget stops at (ChainIntegrator::tasksPerPass); any whole number
-// of direct samples and of passes gives an unbiased image.
+// budget, of a render of the budget it plans, ChainIntegrator::timeBudgetPlan; past those, the direct
+// component keeps that pace), at least one. A pass is the unit a time budget stops at
+// (ChainIntegrator::tasksPerPass); any whole number of direct samples and of passes gives an unbiased image.
 #pragma once
 #include <cstdint>
 #include <optional>
