@@ -31,7 +31,9 @@
 //    memory, bytes on the wire, the worker's encode time and the master's decode + merge time per result,
 //    through the real codec and merge (decodeChainResult into a fresh block, mergeChainResult into the
 //    job's chains). The tasks are the first K (default 8, a pass of erpt/mept) of a time-budgeted render of
-//    integrator NAME with job seed 1, run on 2 threads; both merged films must come out bitwise equal.
+//    integrator NAME with job seed 1, run on 2 threads; both merged films must come out bitwise equal. Then the
+//    same K results as one batch (pathfarm-worker --batch K): its bytes, the worker's summing and encoding and
+//    the master's decode + merge.
 #include <unistd.h>
 
 #include <atomic>
@@ -460,6 +462,25 @@ void chainResults(const std::string &scene, const std::string &name, const NameV
     const auto bits = [](std::span<const double> a, std::span<const double> b) {
         return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size_bytes()) == 0;
     };
+    // The same K results as one batch (pathfarm-worker --batch K, worker/chain_batch.h): summed in task order on
+    // the worker, encoded once, decoded and merged once on the master.
+    auto t0 = std::chrono::steady_clock::now();
+    ChainResult sum = *results.front();
+    for (size_t i = 1; i < results.size(); ++i) addChainResult(sum, *results[i]);
+    const double sumMs = msSince(t0);
+    t0 = std::chrono::steady_clock::now();
+    const std::string batchWire = farm::encodeChainResult(sum);
+    const double encodeMs = msSince(t0);
+    ChainImage batched(makeFilmBlock(*loaded));
+    t0 = std::chrono::steady_clock::now();
+    mergeChainResult(batched, farm::decodeChainResult(batchWire, makeFilmBlock(*loaded, BlockStorage::Tiles)),
+                     results.size());
+    const double mergeMs = msSince(t0);
+    std::printf(
+        "as one batch of %zu: film %.2f MB, wire %.1f KB (%.1f KB per task, %.1fx fewer bytes than single results), "
+        "summing on the worker %.2f ms, encode %.2f ms, decode+merge %.2f ms (%.2f ms per task)\n",
+        results.size(), sizeof(double) * sum.film.storedValues() / 1e6, batchWire.size() / 1e3,
+        batchWire.size() / 1e3 / n, sums[2] / (batchWire.size() / 1e3), sumMs, encodeMs, mergeMs, mergeMs / n);
     std::printf("merged films bitwise equal: %s\n", bits(now.film.splatData(), before.film.splatData()) &&
                                                             bits(now.film.sumData(), before.film.sumData()) &&
                                                             bits(now.film.weightData(), before.film.weightData())

@@ -81,12 +81,12 @@ bool Master::startsPass(const JobRuntime &j, int64_t index) {
 // ---------------------------------------------------------------------------------------------------
 // Merging
 
-void Master::mergeChainOutput(JobFilm &f, const v1::TaskSpec &work, TaskOutput output) {
+void Master::mergeChainOutput(JobFilm &f, const v1::TaskSpec &work, TaskOutput output, int64_t tasks) {
     ChainJob &job = *f.chain->job;
     if (work.has_seeding()) {
         job.mergeSeeding(std::move(std::get<SeedingResult>(output)));
     } else if (work.has_chain()) {
-        job.mergeChain(std::get<ChainResult>(output));
+        job.mergeChain(std::get<ChainResult>(output), static_cast<uint64_t>(tasks));
     } else {
         job.mergeDirect(std::get<ImageBlock>(output), work.image().sample_count());
     }

@@ -226,8 +226,10 @@ void Master::recoverJob(const StoredJob &stored) {
         // The later tasks of a batched result share its file: they join their first task's entry.
         if (const auto last = j.film.pending.rbegin(); last != j.film.pending.rend() && last->second.file == r.file &&
                                                        last->first + last->second.tasks == r.taskIndex) {
-            v1::ImageTask &batch = *last->second.work.mutable_image();
-            batch.set_sample_count(batch.sample_count() + work.image().sample_count());
+            if (work.has_image()) {
+                v1::ImageTask &batch = *last->second.work.mutable_image();
+                batch.set_sample_count(batch.sample_count() + work.image().sample_count());
+            }
             ++last->second.tasks;
             j.countTime(work, 1, v1::TaskStats());  // the batch's time came with its first task
             continue;

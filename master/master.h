@@ -131,9 +131,9 @@ public:
     // The most tasks one lease (and one batched result) holds.
     static constexpr int kMaxBatchTasks = 64;
     // A task for this worker, waiting up to `wait` for one; empty when there is none (or the worker
-    // drains). With maxTasks > 1, the image tasks that follow it in its job too (up to maxTasks, capped at
-    // kMaxBatchTasks, as many as can be leased now), for a batched result; with farm::kAutoBatch, up to
-    // the governor's batch. Throws UnknownWorker.
+    // drains). With maxTasks > 1, the tasks of its kind that follow it in its job too (image tasks of an image
+    // job, chain tasks of a chain job; up to maxTasks, capped at kMaxBatchTasks, as many as can be leased now),
+    // for a batched result; with farm::kAutoBatch, up to the governor's batch. Throws UnknownWorker.
     std::vector<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait,
                                               int maxTasks = 1);
     // Renews the worker's leases; returns the attempts it no longer holds. Throws UnknownWorker.
@@ -197,9 +197,12 @@ private:
     bool mayIssue(JobRuntime &j);
     // Ends a time budget: no task after those issued.
     void closeTimeBudget(JobRuntime &j);
-    // Whether a batch of the batchTasks image tasks of j from firstTask may take one more (time budgets: if it
-    // still ends in time).
-    bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks) const;
+    // Whether task `index` of j may be part of a batch: an image job's whole tasks (not the partial last one),
+    // a chain job's chain tasks (not its seeding or direct tasks).
+    static bool batchable(const JobRuntime &j, int64_t index);
+    // Whether a batch of the batchTasks tasks of j from firstTask, leased to a worker of `threads` threads, may
+    // take one more (time budgets: if it still ends in time).
+    bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks, int threads) const;
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
                  const std::string &error, int64_t attempt);
     void countFailure(JobRuntime &j, const std::string &worker, const std::string &why);
@@ -213,7 +216,8 @@ private:
     void mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutput>> fresh);
     // The memory a decoded result holds while it waits for its turn (0: not worth holding).
     static size_t heldBytes(const TaskOutput &output);
-    void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output);
+    // Merges the result of `tasks` tasks (a batch: more than one) that starts with `work`'s.
+    void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output, int64_t tasks);
     // The pending result of tasks [task, task + count) is lost: they go back to the queue (takes mu_).
     void discardResult(JobRuntime &j, int64_t task, int64_t count, const std::string &file);
     // Logs a failed write of the job's film files once per distinct fault.
@@ -238,7 +242,7 @@ private:
     // Upper bound of a seeding result's payload.
     static uint64_t maxSeedingPayloadBytes(const JobRuntime &j, const pathfarm::v1::TaskSpec &work);
     // mergeOutput for a chain job's tasks (film mutex held).
-    static void mergeChainOutput(JobFilm &f, const pathfarm::v1::TaskSpec &work, TaskOutput output);
+    static void mergeChainOutput(JobFilm &f, const pathfarm::v1::TaskSpec &work, TaskOutput output, int64_t tasks);
     // Under both mutexes, after a merge: the record's chain figures, and the chain phase once seeded.
     void recordChainMerge(JobRuntime &j, uint64_t seedingSamples, uint64_t directSamples);
     // Once the seeding is merged: the chain phase starts (called with both mutexes held).

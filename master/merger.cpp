@@ -61,16 +61,20 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 task = a->second;
                 work = j->tasks[static_cast<size_t>(task)].work;
             }
-        // A batch is merged as one image task of all its samples: its tasks must follow each other.
-        for (int64_t i = 1; i < count; ++i) {
+        // A batch is merged as one task of its kind (an image task of all its samples, or a chain task's
+        // result that counts as all of them): its tasks must follow each other and be batchable.
+        for (int64_t i = (count > 1 ? 0 : 1); i < count; ++i) {
             const auto a = j->attemptTask.find(attempts[static_cast<size_t>(i)]);
-            if (j->chain || a == j->attemptTask.end() || a->second != task + i)
+            if (a == j->attemptTask.end() || a->second != task + i || !batchable(*j, a->second))
                 throw farm::FarmError(
-                    "CompleteTask: batched attempt " + std::to_string(attempts[static_cast<size_t>(i)]) +
-                    " is not image task " + std::to_string(task + i) + " of job " + std::to_string(j->record.id()) +
-                    " (a batch holds the tasks after attempt " + std::to_string(attempt) + "'s in order)");
-            const auto &next = j->tasks[static_cast<size_t>(a->second)].work.image();
-            work.mutable_image()->set_sample_count(work.image().sample_count() + next.sample_count());
+                    "CompleteTask: batched attempt " + std::to_string(attempts[static_cast<size_t>(i)]) + " is not " +
+                    (j->chain ? "chain" : "image") + " task " + std::to_string(task + i) + " of job " +
+                    std::to_string(j->record.id()) + " (a batch holds the tasks after attempt " +
+                    std::to_string(attempt) + "'s in order)");
+            if (i > 0 && work.has_image()) {
+                const auto &next = j->tasks[static_cast<size_t>(a->second)].work.image();
+                work.mutable_image()->set_sample_count(work.image().sample_count() + next.sample_count());
+            }
         }
     }
     const int64_t jobId = j->record.id();
@@ -245,7 +249,7 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
                 continue;
             }
         }
-        mergeOutput(j, work, std::move(*output));
+        mergeOutput(j, work, std::move(*output), it->second.tasks);
         const double mergeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
         seconds += mergeSeconds;
         if (f.merged >= j.chainFirst && it->second.transferSeconds >= 0) {
@@ -326,10 +330,10 @@ void Master::storageFault(JobRuntime &j, const char *what, const std::exception 
                   what, e.what());
 }
 
-void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput output) {
+void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput output, int64_t tasks) {
     JobFilm &f = j.film;
     if (f.chain) {
-        mergeChainOutput(f, work, std::move(output));
+        mergeChainOutput(f, work, std::move(output), tasks);
         return;
     }
     ImageBlock &block = std::get<ImageBlock>(output);

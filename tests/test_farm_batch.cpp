@@ -1,21 +1,26 @@
-// Batched results (issue 17): a worker leases image tasks that follow each other in a job, merges their
-// film blocks in task order and returns one result naming every attempt, so that the master decodes and
-// merges one film for all of them. Checked here: the image equals the embedded render up to the rounding of
-// the batch's own sum (it is added to the film as one block, not task by task), every task is merged exactly
-// once (also under a time budget), a batch that is out of order, repeats an attempt, names another worker's
-// attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master
-// restart with a batch waiting for its turn, loses no work.
+// Batched results (issue 17): a worker leases image tasks (or a chain job's chain tasks) that follow each other
+// in a job, merges their film blocks (chain results) in task order and returns one result naming every
+// attempt, so that the master decodes and merges one film for all of them. Checked here: the image equals the embedded
+// render up to the rounding of the batch's own sum (it is added to the film as one block, not task by task), every task
+// is merged exactly once (also under a time budget), a batch that is out of order, repeats an attempt, names another
+// worker's attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master restart
+// with a batch waiting for its turn, loses no work.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "batch_governor.h"
 #include "farm/block_codec.h"
+#include "farm/chain_codec.h"
+#include "farm/convert.h"
 #include "farm/fake_worker.h"
 #include "farm/harness.h"
+#include "farm/job_setup.h"
 #include "image/bitmap.h"
 #include "integrators/integrator.h"
+#include "render/chain_job.h"
 #include "render/image_task.h"
+#include "render/normalizer.h"
 #include "scene/scene.h"
 #include "support/process.h"
 
@@ -73,6 +78,36 @@ public:
 private:
     std::unique_ptr<Scene> loaded_;
     std::unique_ptr<Integrator> integrator_;
+};
+
+// The payload a worker returns for any task of a Markov-chain job, computed here as pathfarm-worker does,
+// and for a run of chain tasks their results summed in task order (worker/chain_batch.h).
+class ChainPayloads {
+public:
+    ChainPayloads(const std::string &scene, const v1::TaskSpec &any)
+        : loaded_(loadScene(scene)),
+          integrator_(makeIntegrator(*loaded_, any.job().integrator(), pf::farm::toNameValues(any.job().params()))),
+          chains_(dynamic_cast<const ChainIntegrator &>(*integrator_)) {}
+    std::string payload(const std::vector<v1::TaskSpec> &tasks) const {
+        const v1::TaskSpec &t = tasks.front();
+        const uint64_t seed = t.job().seed();
+        if (t.has_seeding())
+            return pf::farm::encodeSeedingResult(
+                chains_.runSeeding(*loaded_, t.job().budget().spp(), seed, pf::farm::fromProto(t.seeding())));
+        if (t.has_image())
+            return pf::farm::encodeBlock(
+                runDirectTask(*loaded_, chains_, seed, ImageTask{t.image().first_sample(), t.image().sample_count()}, 1)
+                    .block);
+        ChainResult sum = runChainTask(*loaded_, chains_, seed, pf::farm::fromProto(t.chain()));
+        for (size_t i = 1; i < tasks.size(); ++i)
+            addChainResult(sum, runChainTask(*loaded_, chains_, seed, pf::farm::fromProto(tasks[i].chain())));
+        return pf::farm::encodeChainResult(sum);
+    }
+
+private:
+    std::unique_ptr<Scene> loaded_;
+    std::unique_ptr<Integrator> integrator_;
+    const ChainIntegrator &chains_;
 };
 
 std::vector<int64_t> laterAttempts(const std::vector<v1::TaskSpec> &tasks) {
@@ -282,6 +317,149 @@ TEST_F(FarmTest, ABatchWaitingForItsTurnSurvivesAMasterRestart) {
                         .accepted());
     expectEqualUpToRounding(job.reference, job.fetch(*farm));
     expectMergedOnce(*farm, job.id, kSpp / 8);
+}
+
+// Markov-chain jobs batch their chain tasks (never the seeding or the direct component's tasks): the worker
+// sums a batch's chain results in task order, and the image equals the embedded render up to that rounding,
+// with every task merged once and the same mutations, seed samples and passes.
+TEST_F(FarmTest, ChainTasksBatchToTheEmbeddedImageUpToRounding) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 48, 8);
+    farm->startMaster();
+    farm->startWorker(2, {"--batch", "4"});
+    for (const std::string args : {"--integrator mlt --spp 64 -P luminanceSamples=5000 -P directSamples=2",
+                                   "--integrator erpt --spp 8 -P luminanceSamples=5000 -P directSamples=2 -P "
+                                   "chainLength=20 -P passMutations=2000"}) {
+        SCOPED_TRACE(args);
+        const std::string spec = args + " --seed 5 -P maxDepth=4";
+        const std::string ref = farm->embeddedRender(scene, spec, "ref");
+        const std::string out = farm->dir() + "/farm.exr";
+        const auto [code, output] = farm->cli("submit " + scene + " " + spec + " --wait -o " + out);
+        ASSERT_EQ(code, 0) << output << farm->master().log();
+        expectEqualUpToRounding(ref, out);
+        const int64_t id = jobIdFrom(output);
+        const v1::Job job = farm->waitForJob(id, 10s);
+        ASSERT_EQ(job.state(), v1::JOB_DONE);
+        expectMergedOnce(*farm, id, job.tasks().total());
+        const std::string batched =
+            "SELECT COUNT(*) FROM results r JOIN tasks t ON t.job_id = r.job_id AND t.idx = r.task_idx WHERE r.bytes = "
+            "0 "
+            "AND r.job_id = " +
+            std::to_string(id);
+        EXPECT_GT(farm->queryStore(batched + " AND t.kind = 'chain'"), 0);
+        EXPECT_EQ(farm->queryStore(batched + " AND t.kind <> 'chain'"), 0);
+        // The embedded render's figures: the chains' mutations per pixel and, for bursts, whole passes.
+        const Bitmap embedded = readEXR(ref);
+        EXPECT_EQ(std::to_string(job.chain().mutations_per_pixel()), embedded.metadata.at("pathfarm.spp"));
+        EXPECT_EQ(job.chain().direct_tasks(), 2u);
+        EXPECT_EQ(job.chain().seeding_tasks() + job.chain().direct_tasks() +
+                      job.chain().passes() * job.chain().tasks_per_pass(),
+                  static_cast<uint64_t>(job.tasks().total()));
+    }
+}
+
+// Under a time budget a batch of chain tasks takes a further task only while it still ends in time on the
+// worker's threads, and the job still ends with whole passes, each task merged once.
+TEST_F(FarmTest, ATimedChainJobBatchesWholePassesMergedOnce) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 48, 8);
+    farm->startMaster();
+    farm->startWorker(2, {"--batch", "8"});
+    const auto [code, output] =
+        farm->cli("submit " + scene +
+                  " --integrator erpt --time 3 --seed 5 -P maxDepth=4 -P luminanceSamples=5000 -P chainLength=20"
+                  " -P passMutations=2000");
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    const v1::Job job = farm->waitForJob(id, 60s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm->master().log();
+    EXPECT_GT(job.chain().passes(), 1u);
+    EXPECT_GT(job.chain().mutations(), 0u);
+    expectMergedOnce(*farm, id, job.tasks().total());
+    const std::string chainTasks = "SELECT COUNT(*) FROM tasks WHERE kind = 'chain' AND job_id = " + std::to_string(id);
+    EXPECT_EQ(static_cast<uint64_t>(farm->queryStore(chainTasks)), job.chain().passes() * job.chain().tasks_per_pass());
+    EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0 AND job_id = " + std::to_string(id)), 0);
+}
+
+// A batch of chain tasks accepted ahead of its turn waits on disk through a master restart, is merged once as
+// the tasks it names, and the image equals the embedded render up to the batch's rounding.
+TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
+    farm->startMaster(kFastLeases);
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    const std::string spec =
+        "--integrator mlt --spp 64 --seed 4 -P maxDepth=4 -P luminanceSamples=5000 -P directSamples=0";
+    const std::string ref = farm->embeddedRender(scene, spec, "ref");
+    const auto [code, output] = farm->cli("submit " + scene + " " + spec);
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    FakeWorker first(*farm), batcher(*farm);
+    std::optional<ChainPayloads> payloads;
+    // The seeding, task by task, up to the first chain task, which `first` keeps.
+    std::vector<v1::TaskSpec> head;
+    for (;;) {
+        head = first.leaseBatch(1);
+        ASSERT_EQ(head.size(), 1u);
+        if (!payloads) payloads.emplace(scene, head[0]);
+        if (head[0].has_chain()) break;
+        ASSERT_TRUE(first.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
+    }
+    const std::vector<v1::TaskSpec> batch = batcher.leaseBatch(3);
+    ASSERT_EQ(batch.size(), 3u);
+    for (size_t i = 0; i < batch.size(); ++i) {
+        EXPECT_TRUE(batch[i].has_chain());
+        EXPECT_EQ(batch[i].task_index(), head[0].task_index() + 1 + static_cast<int64_t>(i));
+    }
+    EXPECT_TRUE(
+        batcher.complete(batch[0].attempt_id(), payloads->payload(batch), grpc::StatusCode::OK, laterAttempts(batch))
+            .accepted());
+    farm->killMaster();
+    farm->startMaster(kFastLeases);
+    EXPECT_TRUE(first.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
+    for (std::vector<v1::TaskSpec> rest = first.leaseBatch(2); !rest.empty(); rest = first.leaseBatch(2))
+        EXPECT_TRUE(
+            first.complete(rest[0].attempt_id(), payloads->payload(rest), grpc::StatusCode::OK, laterAttempts(rest))
+                .accepted());
+    const v1::Job job = farm->waitForJob(id, 60s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE);
+    expectMergedOnce(*farm, id, job.tasks().total());
+    // The batch was merged from its file, not lost and rendered again: one attempt per task.
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM attempts WHERE job_id = " + std::to_string(id)),
+              job.tasks().total());
+    const std::string out = farm->dir() + "/farm.exr";
+    const auto [fetched, log] = farm->cli("fetch " + std::to_string(id) + " -o " + out);
+    ASSERT_EQ(fetched, 0) << log;
+    expectEqualUpToRounding(ref, out);
+}
+
+// A chain job batches its chain tasks only: a result that names a direct-component task and the chain task after
+// it as one batch is refused as a bad request, and nothing of it is stored; each alone is taken.
+TEST_F(FarmTest, ABatchOfADirectAndAChainTaskIsRefused) {
+    farm->startMaster();
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    const auto [code, output] = farm->cli("submit " + scene +
+                                          " --integrator mlt --spp 64 --seed 4 -P maxDepth=4 -P luminanceSamples=5000"
+                                          " -P directSamples=1");
+    ASSERT_EQ(code, 0) << output;
+    FakeWorker w(*farm);
+    std::optional<ChainPayloads> payloads;
+    std::vector<v1::TaskSpec> direct;
+    for (;;) {
+        direct = w.leaseBatch(1);
+        ASSERT_EQ(direct.size(), 1u);
+        if (!payloads) payloads.emplace(scene, direct[0]);
+        if (direct[0].has_image()) break;
+        ASSERT_TRUE(w.complete(direct[0].attempt_id(), payloads->payload(direct)).accepted());
+    }
+    // The pass's direct task comes first, then its chain task; leased one by one, then claimed as a batch.
+    const std::vector<v1::TaskSpec> chain = w.leaseBatch(1);
+    ASSERT_EQ(chain.size(), 1u);
+    ASSERT_TRUE(chain[0].has_chain());
+    ASSERT_EQ(chain[0].task_index(), direct[0].task_index() + 1);
+    const int64_t results = farm->queryStore("SELECT COUNT(*) FROM results");
+    w.complete(direct[0].attempt_id(), payloads->payload(direct), grpc::StatusCode::INVALID_ARGUMENT,
+               {chain[0].attempt_id()});
+    EXPECT_NE(w.lastError().find("is not chain task"), std::string::npos) << w.lastError();
+    EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM results"), results);
+    EXPECT_TRUE(w.complete(direct[0].attempt_id(), payloads->payload(direct)).accepted());
+    EXPECT_TRUE(w.complete(chain[0].attempt_id(), payloads->payload(chain)).accepted());
 }
 
 }  // namespace

@@ -39,7 +39,8 @@ int main(int argc, char **argv) {
     app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
     std::string batch = "auto";
     app.add_option("--batch", batch,
-                   "Image tasks leased at once and returned as one result (less master CPU per task): 1..64, or "
+                   "Tasks leased at once and returned as one result (image tasks, or a Markov-chain job's chain "
+                   "tasks; less master CPU and fewer bytes per task): 1..64, or "
                    "auto, where the master batches only while taking results keeps it busy. Only batches of one "
                    "give an image equal to the embedded render bit for bit")
         ->check(CLI::IsMember({"auto"}) | CLI::Range(1, 64))

@@ -169,8 +169,14 @@ int Worker::run() {
             } else {
                 workBatch(tasks, cfg_.threads);
             }
+        } else if (tasks.size() == 1) {
+            queued_.push_back({tasks.front(), nullptr});
+            changed_.notify_all();
         } else {
-            queued_.push_back(tasks.front());
+            std::vector<int64_t> attempts;
+            for (const v1::TaskSpec &t : tasks) attempts.push_back(t.attempt_id());
+            const auto batch = std::make_shared<ChainBatch>(std::move(attempts));
+            for (size_t i = 0; i < tasks.size(); ++i) queued_.push_back({tasks[i], batch, i});
             changed_.notify_all();
         }
     }
@@ -245,11 +251,15 @@ void Worker::runnerLoop() {
         std::unique_lock<std::mutex> lock(mu_);
         changed_.wait(lock, [&] { return !queued_.empty() || stopping_; });
         if (queued_.empty()) return;
-        const v1::TaskSpec task = std::move(queued_.front());
+        const Queued q = std::move(queued_.front());
         queued_.pop_front();
         ++running_;
         lock.unlock();
-        work(task, 1);
+        if (q.batch) {
+            workInBatch(q);
+        } else {
+            work(q.task, 1);
+        }
         lock.lock();
         --running_;
         changed_.notify_all();
@@ -347,6 +357,41 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
     flush();
 }
 
+void Worker::workInBatch(const Queued &q) {
+    const v1::TaskSpec &task = q.task;
+    std::optional<ChainResult> result;
+    double loadSeconds = 0;
+    if (mayRender(task)) {
+        try {
+            const auto t0 = std::chrono::steady_clock::now();
+            const std::shared_ptr<const Prepared> p = prepare(task);
+            loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            if (!task.has_chain()) throw std::runtime_error("a batch holds chain tasks only");
+            result.emplace(runChain(*p, task));
+        } catch (const std::exception &e) {
+            failTask(task.attempt_id(), e.what());
+        }
+        if (result && !keepResult(task)) result.reset();
+    }
+    for (ChainBatch::Run &run : q.batch->finish(q.slot, std::move(result), loadSeconds)) {
+        const ChainResult &c = run.sum;
+        Result r{run.attempts.front(),
+                 {run.attempts.begin() + 1, run.attempts.end()},
+                 farm::encodeChainResult(c),
+                 c.mutations,
+                 c.rays,
+                 c.seconds,
+                 run.loadSeconds};
+        queueUpload(std::move(r));
+    }
+}
+
+ChainResult Worker::runChain(const Prepared &p, const v1::TaskSpec &task) const {
+    const auto *chain = dynamic_cast<const ChainIntegrator *>(p.integrator.get());
+    if (!chain) throw std::runtime_error("integrator '" + p.integrator->name() + "' runs no chain tasks");
+    return runChainTask(*p.scene, *chain, task.job().seed(), farm::fromProto(task.chain()));
+}
+
 ImageTaskResult Worker::renderImage(const Prepared &p, const v1::TaskSpec &task, int threads) const {
     const uint64_t seed = task.job().seed();
     const ImageTask image{task.image().first_sample(), task.image().sample_count(),
@@ -376,7 +421,7 @@ Worker::Result Worker::runTask(const Prepared &p, const v1::TaskSpec &task, int 
         r.payload = farm::encodeSeedingResult(s);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(s.samples, s.rays, s.seconds);
     } else if (task.has_chain()) {
-        const ChainResult c = runChainTask(*p.scene, *chain, seed, farm::fromProto(task.chain()));
+        const ChainResult c = runChain(p, task);
         r.payload = farm::encodeChainResult(c);
         std::tie(r.samples, r.rays, r.seconds) = std::tuple(c.mutations, c.rays, c.seconds);
     } else if (task.has_image()) {

@@ -1,10 +1,10 @@
 // The worker: registers with the master and pulls tasks. An image task renders on all its threads; seeding
 // and chain tasks run one per thread (a chain is sequential), so the worker holds up to --threads of them
-// at once. Results stream back while the next tasks run. Leases are renewed by a heartbeat thread;
-// scenes are cached by bundle hash (on disk) and the last loaded scene is kept in memory. When the
-// master is away every call is retried with backoff, so a restarted master finds its workers again;
-// a draining worker stops retrying once the master has not answered for a lease time (its tasks are
-// then another worker's) and exits, reporting the results it could not deliver.
+// at once, or a batch of chain tasks (chain_batch.h). Results stream back while the next tasks run. Leases are renewed
+// by a heartbeat thread; scenes are cached by bundle hash (on disk) and the last loaded scene is kept in memory. When
+// the master is away every call is retried with backoff, so a restarted master finds its workers again; a draining
+// worker stops retrying once the master has not answered for a lease time (its tasks are then another worker's) and
+// exits, reporting the results it could not deliver.
 #pragma once
 #include <atomic>
 #include <condition_variable>
@@ -17,6 +17,7 @@
 #include <thread>
 #include <vector>
 
+#include "chain_batch.h"
 #include "farm/bundle.h"
 #include "farm/rpc.h"
 #include "integrators/integrator.h"
@@ -33,9 +34,9 @@ struct WorkerConfig {
     std::string name;
     std::string cacheDir = "pathfarm-cache";
     int threads = 1;
-    // Image tasks leased at once and returned as one result (merged here in task order), so that the
-    // master decodes and merges one film for all of them. 1: a result per task, whose merge on the master
-    // reproduces the embedded render bit for bit; a batch's sum rounds differently (in the last bits).
+    // Tasks leased at once and returned as one result (image tasks, or a chain job's chain tasks, merged here
+    // in task order), so that the master decodes and merges one film for all of them. 1: a result per task, whose merge
+    // on the master reproduces the embedded render bit for bit; a batch's sum rounds differently (in the last bits).
     // farm::kAutoBatch: as many as the master chooses, which batches only while results keep it busy.
     int batch = farm::kAutoBatch;
     int maxMessageBytes = 4 << 20;  // until the master says otherwise
@@ -81,6 +82,14 @@ private:
     std::vector<pathfarm::v1::TaskSpec> leaseTasks();
     // Runs a task (held already) on `threads` threads and queues its result for upload.
     void work(const pathfarm::v1::TaskSpec &task, int threads);
+    // A single-threaded task waiting for a runner, and the batch of chain tasks it belongs to (null: none).
+    struct Queued {
+        pathfarm::v1::TaskSpec task;
+        std::shared_ptr<ChainBatch> batch;
+        size_t slot = 0;  // its place in the batch
+    };
+    // Runs a chain task of a batch on this thread, and queues the runs of the batch it completes for upload.
+    void workInBatch(const Queued &q);
     // Runs a batch of image tasks (held already) one after another on `threads` threads, and queues each
     // run of them that follow each other (all, unless one failed or was lost) as one result.
     void workBatch(const std::vector<pathfarm::v1::TaskSpec> &tasks, int threads);
@@ -89,6 +98,7 @@ private:
     bool mayRender(const pathfarm::v1::TaskSpec &task);
     bool keepResult(const pathfarm::v1::TaskSpec &task);
     ImageTaskResult renderImage(const Prepared &p, const pathfarm::v1::TaskSpec &task, int threads) const;
+    ChainResult runChain(const Prepared &p, const pathfarm::v1::TaskSpec &task) const;
     void queueUpload(Result result);
     Result runTask(const Prepared &p, const pathfarm::v1::TaskSpec &task, int threads) const;
     // Runs the queued single-threaded tasks (seeding, chains), one at a time.
@@ -134,8 +144,8 @@ private:
     std::set<int64_t> held_, lost_;
     std::deque<Result> uploads_;
     bool uploading_ = false;
-    std::deque<pathfarm::v1::TaskSpec> queued_;  // single-threaded tasks waiting for a runner
-    int running_ = 0;                            // single-threaded tasks running
+    std::deque<Queued> queued_;  // single-threaded tasks waiting for a runner
+    int running_ = 0;            // single-threaded tasks running
     std::vector<std::thread> runners_;
     grpc::ClientContext *leaseCall_ = nullptr;   // cancelled by drain()
     grpc::ClientContext *uploadCall_ = nullptr;  // cancelled once draining and the master is gone

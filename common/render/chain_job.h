@@ -65,7 +65,8 @@ public:
     // The last seeding result builds the normalizer.
     void mergeSeeding(SeedingResult result);
     void mergeDirect(const ImageBlock &block, int64_t samplesPerPixel);
-    void mergeChain(const ChainResult &result) { mergeChainResult(chains_, result); }
+    // A farm worker's batch comes as the sum of `tasks` chain tasks that follow each other.
+    void mergeChain(const ChainResult &result, uint64_t tasks = 1) { mergeChainResult(chains_, result, tasks); }
     // Puts back the merged direct component and chains of a checkpoint (after the seeding is merged again).
     void restore(ImageBlock direct, int64_t directSamplesPerPixel, ChainImage chains);
 

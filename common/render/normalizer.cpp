@@ -1,6 +1,7 @@
 #include "render/normalizer.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace pf {
 
@@ -68,15 +69,42 @@ double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutatio
     return kind == ChainKind::Long ? 1.0 : seed.weight / static_cast<double>(mutations);
 }
 
-void mergeChainResult(ChainImage &image, const ChainResult &result) {
+namespace {
+
+// The figures of a chain result, added to a ChainImage's or another result's (the same fields).
+template <class Sum>
+void addFigures(Sum &sum, const ChainResult &result) {
+    sum.mutations += result.mutations;
+    sum.seedSamples += result.seedSamples;
+    addCounts(sum.counts, result.counts);
+    addCounters(sum.counters, result.counters);
+    sum.rays += result.rays;
+    sum.seconds += result.seconds;
+}
+
+}  // namespace
+
+void mergeChainResult(ChainImage &image, const ChainResult &result, uint64_t tasks) {
     image.film.merge(result.film);
-    image.mutations += result.mutations;
-    image.tasks += 1;
-    image.seedSamples += result.seedSamples;
-    addCounts(image.counts, result.counts);
-    addCounters(image.counters, result.counters);
-    image.rays += result.rays;
-    image.seconds += result.seconds;
+    image.tasks += tasks;
+    addFigures(image, result);
+}
+
+void addChainResult(ChainResult &sum, const ChainResult &result) {
+    SplatTiles *to = sum.film.tiles();
+    const SplatTiles *from = result.film.tiles();
+    // ImageBlock::merge adds into dense blocks only; a batch's sum stays as sparse as its tasks' films.
+    if (!to || !from || to->tileCount() != from->tileCount() || sum.film.width() != result.film.width() ||
+        sum.film.height() != result.film.height())
+        throw std::invalid_argument("addChainResult: the films are not tiles of the same crop window");
+    for (size_t t = 0; t < from->tileCount(); ++t) {
+        const std::span<const double> values = from->tile(t);
+        if (values.empty()) continue;
+        const std::span<double> into = to->allocate(t);
+        for (size_t k = 0; k < values.size(); ++k) into[k] += values[k];
+    }
+    sum.film.setInvalidSamples(sum.film.invalidSamples() + result.film.invalidSamples());
+    addFigures(sum, result);
 }
 
 Bitmap developChains(const Film &film, const ChainImage &image, double scale) {

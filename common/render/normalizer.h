@@ -67,8 +67,12 @@ struct ChainImage {
 
 // The factor a chain's deposits carry: 1 for long chains, weight / M for bursts.
 double chainDepositScale(ChainKind kind, const ChainSeed &seed, uint64_t mutations);
-// Adds a task's result. Tasks merged in the same order give the same bits.
-void mergeChainResult(ChainImage &image, const ChainResult &result);
+// Adds a task's result, or the sum of `tasks` tasks' results (a farm worker's batch, addChainResult). Tasks
+// merged in the same order give the same bits; a batch's sum rounds differently in the last bits.
+void mergeChainResult(ChainImage &image, const ChainResult &result, uint64_t tasks = 1);
+// Adds `result` to `sum`, both films as tiles (render/chain.h): what a farm worker returns for a batch of chain
+// tasks, so that the master decodes and merges one film for all of them.
+void addChainResult(ChainResult &sum, const ChainResult &result);
 // The normalized image: the films times `scale` (ChainIntegrator::chainImageScale).
 Bitmap developChains(const Film &film, const ChainImage &image, double scale);
 
