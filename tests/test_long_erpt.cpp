@@ -1,8 +1,8 @@
 // The long version of test_erpt (label "long", `make test-long`): `erpt` against a BDPT reference at
 // 32 x 32 with 32 independent renders each, with Mitsuba's split (a separate direct component, of 64 samples
-// per pixel here) and with every path left to the
-// chains, and each of Veach's mutations alone on every scene where it applies (ALGORITHMS.md §5.2: bursts
-// stay unbiased with any transition rule that keeps the target, so each one is tested by itself).
+// per pixel here) and with every path left to the chains, and each of Veach's mutations alone on every scene
+// where it applies (ALGORITHMS.md §5.2: bursts stay unbiased with any transition rule that keeps the target, so
+// each one is tested by itself).
 #include <gtest/gtest.h>
 
 #include "test_mlt_common.h"
