@@ -3,7 +3,8 @@
 //
 //   bench_farm [SCENE] [--res N] [--spp N] [--fake-workers N] [--fake-tasks N] [--fake-res N] [--fake-only]
 //              [--fake-batch N|auto[,...]] [--task-seconds S]
-//   bench_farm [SCENE] --chain NAME [--chain-tasks K] [-P name=value ...]
+//   bench_farm [SCENE] --chain NAME [--chain-tasks K] [-P name=value ...] [--chain-farm S [--fake-workers N]
+//              [--fake-batch N|auto[,...]]]
 //   (default: scenes/cornell-box/scene.xml at 256x256, 64 spp; 32 fake workers, 400 tasks at --res,
 //   batches of 1)
 //
@@ -34,6 +35,11 @@
 //    integrator NAME with job seed 1, run on 2 threads; both merged films must come out bitwise equal. Then the
 //    same K results as one batch (pathfarm-worker --batch K): its bytes, the worker's summing and encoding and
 //    the master's decode + merge.
+// 6. --chain-farm S (after 5): a chain job of integrator NAME under --time S at the scene's own size, on a fresh
+//    master with N fake workers (part 4's) that return part 5's results at once (a batch of n chain tasks: the
+//    sum of the first min(n, K)), once per --fake-batch size: the master's CPU per chain task (its whole CPU,
+//    seeding and direct tasks included, over the chain tasks) and the 8-core workers one master core keeps busy
+//    at part 5's mean chain task time.
 #include <unistd.h>
 
 #include <atomic>
@@ -41,6 +47,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -112,12 +119,14 @@ std::map<int64_t, std::string> resultsBySampleCount(const std::string &scene, in
     return out;
 }
 
+// What a fake worker returns for a lease (its task and the batch after it): the payload, and TaskStats.samples.
+using PayloadFor = std::function<std::pair<const std::string *, uint64_t>(const v1::LeaseReply &)>;
+
 // A worker that returns precomputed results over its own connection, as fast as the master leases.
 class FakeWorker {
 public:
-    FakeWorker(const std::string &address, const std::string &token, const std::map<int64_t, std::string> &results,
-               int64_t pixels, int batch)
-        : token_(token), results_(results), pixels_(pixels), batch_(batch) {
+    FakeWorker(const std::string &address, const std::string &token, PayloadFor payloadFor, int batch)
+        : token_(token), payloadFor_(std::move(payloadFor)), batch_(batch) {
         grpc::ChannelArguments args;
         args.SetMaxReceiveMessageSize(64 << 20);
         args.SetMaxSendMessageSize(64 << 20);
@@ -131,6 +140,7 @@ public:
         check(stub_->Register(context().get(), req, &reply), "Register");
         id_ = reply.worker_id();
         heartbeat_ = std::chrono::milliseconds(reply.heartbeat_ms());
+        chunk_ = static_cast<size_t>(std::max<uint64_t>(reply.max_message_bytes(), 8192) - 4096);
         bytes_ += req.ByteSizeLong() + reply.ByteSizeLong();
     }
 
@@ -167,13 +177,11 @@ public:
     uint64_t bytes() const { return bytes_; }
 
 private:
-    // One result for the leased tasks (a batch: the first task's block stands for their sum, as the size
-    // of a compressed block hardly depends on its sample count).
+    // One result for the leased tasks.
     void complete(const v1::LeaseReply &lease) {
         const v1::TaskSpec &task = lease.task();
-        const std::string &payload = results_.at(task.image().sample_count());
-        int64_t samples = task.image().sample_count();
-        for (const v1::TaskSpec &t : lease.more()) samples += t.image().sample_count();
+        const auto [payloadPtr, samples] = payloadFor_(lease);
+        const std::string &payload = *payloadPtr;
         v1::CompleteReply reply;
         const auto ctx = context();
         auto writer = stub_->CompleteTask(ctx.get(), &reply);
@@ -182,17 +190,24 @@ private:
         h->set_worker_id(id_);
         h->set_attempt_id(task.attempt_id());
         for (const v1::TaskSpec &t : lease.more()) h->add_batch_attempt_ids(t.attempt_id());
-        h->mutable_stats()->set_samples(static_cast<uint64_t>(samples * pixels_));
+        h->mutable_stats()->set_samples(samples);
         h->mutable_stats()->set_seconds(1e-3);
         h->set_payload_size(payload.size());
         h->set_payload_hash(farm::hashHex64(payload));
-        v1::ResultChunk data;
-        data.set_data(payload);
-        if (!writer->Write(header) || !writer->Write(data)) std::fprintf(stderr, "fake worker: write failed\n");
+        bool written = writer->Write(header);
+        bytes_ += header.ByteSizeLong();
+        // In messages the master accepts, as pathfarm-worker sends them.
+        for (size_t off = 0; written && off < payload.size(); off += chunk_) {
+            v1::ResultChunk data;
+            data.set_data(payload.substr(off, chunk_));
+            written = writer->Write(data);
+            bytes_ += data.ByteSizeLong();
+        }
+        if (!written) std::fprintf(stderr, "fake worker: write failed\n");
         writer->WritesDone();
         check(writer->Finish(), "CompleteTask");
         if (!reply.accepted()) std::fprintf(stderr, "fake worker: result ignored: %s\n", reply.reason().c_str());
-        bytes_ += header.ByteSizeLong() + data.ByteSizeLong() + reply.ByteSizeLong();
+        bytes_ += reply.ByteSizeLong();
     }
     std::unique_ptr<grpc::ClientContext> context() const {
         auto ctx = std::make_unique<grpc::ClientContext>();
@@ -205,15 +220,65 @@ private:
     }
 
     std::string token_;
-    const std::map<int64_t, std::string> &results_;
-    int64_t pixels_;
+    PayloadFor payloadFor_;
     int batch_;
     std::unique_ptr<v1::WorkerService::Stub> stub_;
     std::string id_;
     std::chrono::milliseconds heartbeat_{3000};
+    size_t chunk_ = 4 << 20;  // payload bytes per message
     int64_t tasks_ = 0, returned_ = 0;
     uint64_t bytes_ = 0;
 };
+
+// Fake workers on the real API, and what a job costs the master from its submission to its end.
+struct Saturated {
+    v1::Job job;
+    double cpu = 0, wall = 0;  // the master's CPU seconds, and wall seconds
+    uint64_t bytes = 0;        // protobuf messages both ways
+    int64_t leased = 0, returned = 0;
+};
+
+// Starts `workers` fake workers leasing `batch` tasks at a time; `submit` (run once they poll) returns the CLI's
+// arguments of the job. Exits the process when the job fails.
+Saturated runSaturated(test::farm::Farm &farm, test::farm::Process &master, int workers, int batch,
+                       const PayloadFor &payloadFor, const std::function<std::string()> &submit) {
+    std::vector<std::unique_ptr<FakeWorker>> fakes;
+    for (int i = 0; i < workers; ++i)
+        fakes.push_back(std::make_unique<FakeWorker>(farm.address(), farm.workerToken(), payloadFor, batch));
+    std::atomic<bool> done{false};
+    std::vector<std::thread> threads;
+    for (auto &f : fakes)
+        threads.emplace_back([&, w = f.get()] {
+            try {
+                w->run(done);
+            } catch (const std::exception &e) {
+                std::fprintf(stderr, "%s\n%s\n", e.what(), master.log().c_str());
+                std::exit(1);
+            }
+        });
+    const std::string args = submit();
+    // The master's CPU from submission (after its validation load of the scene) to the final image.
+    const auto [scode, sout] = farm.cli(args);
+    const int64_t id = test::farm::jobIdFrom(sout);
+    Saturated r;
+    const double cpu0 = cpuSeconds(master.pid());
+    const auto t0 = std::chrono::steady_clock::now();
+    r.job = farm.waitForJob(id, std::chrono::seconds(3600));
+    r.cpu = cpuSeconds(master.pid()) - cpu0;
+    r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    done = true;
+    for (std::thread &t : threads) t.join();
+    if (scode != 0 || r.job.state() != v1::JOB_DONE) {
+        std::fprintf(stderr, "saturation job failed: %s\n%s\n", sout.c_str(), master.log().c_str());
+        std::exit(1);
+    }
+    for (const auto &f : fakes) {
+        r.bytes += f->bytes();
+        r.leased += f->tasks();
+        r.returned += f->returned();
+    }
+    return r;
+}
 
 // Part 4: the master's cost per task under `workers` fake workers returning `batch` tasks per result;
 // with the time an 8-core worker takes per pixel sample (0: unknown), the workers of 8 cores that one
@@ -227,51 +292,29 @@ void saturate(const std::string &scene, int res, int workers, int64_t tasks, dou
         spp += imageTaskSize(std::numeric_limits<int64_t>::max(), spp, int64_t{res} * res);
     if (results.empty()) results = resultsBySampleCount(copy, spp);
     test::farm::Process &master = farm.startMaster({"--max-spp", std::to_string(spp)});
-    std::vector<std::unique_ptr<FakeWorker>> fakes;
-    for (int i = 0; i < workers; ++i)
-        fakes.push_back(
-            std::make_unique<FakeWorker>(farm.address(), farm.workerToken(), results, int64_t(res) * res, batch));
-    std::atomic<bool> done{false};
-    std::vector<std::thread> threads;
-    for (auto &f : fakes)
-        threads.emplace_back([&, w = f.get()] {
-            try {
-                w->run(done);
-            } catch (const std::exception &e) {
-                std::fprintf(stderr, "%s\n%s\n", e.what(), master.log().c_str());
-                std::exit(1);
-            }
-        });
-    // What workers cost the master while there is no work: long-polls and heartbeats.
-    const double idleCpu0 = cpuSeconds(master.pid());
-    constexpr int kIdleSeconds = 6;
-    std::this_thread::sleep_for(std::chrono::seconds(kIdleSeconds));
-    const double idlePerWorker = (cpuSeconds(master.pid()) - idleCpu0) / kIdleSeconds / workers;
-    std::printf(
-        "idle: %d fake workers polling: %.3f ms of master CPU per second per worker (500 workers: %.0f%% of "
-        "a core)\n",
-        workers, 1e3 * idlePerWorker, 100 * 500 * idlePerWorker);
-    // The master's CPU from submission (after its validation load of the scene) to the final image.
-    const auto [scode, sout] = farm.cli("submit " + copy + " --spp " + std::to_string(spp) + " --seed 1");
-    const int64_t id = test::farm::jobIdFrom(sout);
-    const double cpu0 = cpuSeconds(master.pid());
-    const auto t0 = std::chrono::steady_clock::now();
-    const v1::Job job = farm.waitForJob(id, std::chrono::seconds(3600));
-    const double cpu = cpuSeconds(master.pid()) - cpu0;
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    done = true;
-    for (std::thread &t : threads) t.join();
-    if (scode != 0 || job.state() != v1::JOB_DONE) {
-        std::fprintf(stderr, "saturation job failed: %s\n%s\n", sout.c_str(), master.log().c_str());
-        std::exit(1);
-    }
-    uint64_t bytes = 0;
-    int64_t leased = 0, returned = 0;
-    for (const auto &f : fakes) {
-        bytes += f->bytes();
-        leased += f->tasks();
-        returned += f->returned();
-    }
+    // A batch's result: the first task's block stands for their sum, as the size of a compressed block hardly
+    // depends on its sample count.
+    const PayloadFor payloadFor = [&, pixels = uint64_t(res) * uint64_t(res)](const v1::LeaseReply &lease) {
+        uint64_t samples = static_cast<uint64_t>(lease.task().image().sample_count());
+        for (const v1::TaskSpec &t : lease.more()) samples += static_cast<uint64_t>(t.image().sample_count());
+        return std::make_pair(&results.at(lease.task().image().sample_count()), samples * pixels);
+    };
+    const Saturated r = runSaturated(farm, master, workers, batch, payloadFor, [&] {
+        // What workers cost the master while there is no work: long-polls and heartbeats.
+        const double idleCpu0 = cpuSeconds(master.pid());
+        constexpr int kIdleSeconds = 6;
+        std::this_thread::sleep_for(std::chrono::seconds(kIdleSeconds));
+        const double idlePerWorker = (cpuSeconds(master.pid()) - idleCpu0) / kIdleSeconds / workers;
+        std::printf(
+            "idle: %d fake workers polling: %.3f ms of master CPU per second per worker (500 workers: %.0f%% of "
+            "a core)\n",
+            workers, 1e3 * idlePerWorker, 100 * 500 * idlePerWorker);
+        return "submit " + copy + " --spp " + std::to_string(spp) + " --seed 1";
+    });
+    const v1::Job &job = r.job;
+    const double cpu = r.cpu, wall = r.wall;
+    const uint64_t bytes = r.bytes;
+    const int64_t leased = r.leased, returned = r.returned;
     const double n = static_cast<double>(job.tasks().merged());
     std::printf(
         "saturation: %d fake workers, batches of %s (%.1f tasks per result), %lld tasks of %dx%d (%lld spp) "
@@ -401,14 +444,30 @@ double msSince(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
-// Part 5.
-void chainResults(const std::string &scene, const std::string &name, const NameValues &params, int count) {
+// A chain job's results as pathfarm-worker returns them (job seed 1, a time budget): each seeding task's, a
+// direct-component task's block (one sample per pixel), and the sums of the first n chain tasks' results for
+// n = 1..K, as a batch of n returns them (a larger batch's sum is hardly larger than K's).
+struct ChainPayloads {
+    std::vector<std::string> seeding;
+    std::string direct;
+    std::vector<std::string> chainSums;
+    double taskSeconds = 0;  // a chain task's mean core-seconds
+};
+
+// Part 5; fills `payloads` for part 6.
+void chainResults(const std::string &scene, const std::string &name, const NameValues &params, int count,
+                  ChainPayloads &payloads) {
     auto loaded = loadScene(scene);
     const auto integrator = makeIntegrator(*loaded, name, params);
     const auto &chains = dynamic_cast<const ChainIntegrator &>(*integrator);
     ChainJob job(*loaded, chains, 1, 0);
-    for (uint64_t t = 0; t < job.seedingTaskCount(); ++t)
-        job.mergeSeeding(chains.runSeeding(*loaded, 0, 1, job.seedingTask(t)));
+    for (uint64_t t = 0; t < job.seedingTaskCount(); ++t) {
+        SeedingResult seeding = chains.runSeeding(*loaded, 0, 1, job.seedingTask(t));
+        payloads.seeding.push_back(farm::encodeSeedingResult(seeding));
+        job.mergeSeeding(std::move(seeding));
+    }
+    if (chains.directIntegrator())
+        payloads.direct = farm::encodeBlock(runDirectTask(*loaded, chains, 1, ImageTask{0, 1}, 2).block);
     std::vector<ChainTask> tasks;
     for (uint64_t t = job.firstChainTask(); static_cast<int>(tasks.size()) < count; ++t)
         if (job.phaseOf(t) == ChainJob::Phase::Chain) tasks.push_back(job.chainTask(t));
@@ -468,10 +527,20 @@ void chainResults(const std::string &scene, const std::string &name, const NameV
     ChainResult sum = *results.front();
     for (size_t i = 1; i < results.size(); ++i) addChainResult(sum, *results[i]);
     const double sumMs = msSince(t0);
+    {
+        ChainResult prefix = *results.front();
+        payloads.chainSums.push_back(farm::encodeChainResult(prefix));
+        for (size_t i = 1; i < results.size(); ++i) {
+            addChainResult(prefix, *results[i]);
+            payloads.chainSums.push_back(farm::encodeChainResult(prefix));
+        }
+        for (const auto &r : results) payloads.taskSeconds += r->seconds / n;
+    }
     t0 = std::chrono::steady_clock::now();
     const std::string batchWire = farm::encodeChainResult(sum);
     const double encodeMs = msSince(t0);
     ChainImage batched(makeFilmBlock(*loaded));
+    batched.film.clear();  // its pages touched before the clock starts, as those of `now` are by now
     t0 = std::chrono::steady_clock::now();
     mergeChainResult(batched, farm::decodeChainResult(batchWire, makeFilmBlock(*loaded, BlockStorage::Tiles)),
                      results.size());
@@ -488,6 +557,47 @@ void chainResults(const std::string &scene, const std::string &name, const NameV
                                                         : "NO");
 }
 
+// Part 6: a chain job of integrator NAME under a time budget of `seconds` on a fresh master, at the scene's own
+// size, with `workers` fake workers returning part 5's results at once (chain tasks as the batch's sum); the
+// master's CPU per chain task, and the 8-core workers it keeps busy at part 5's chain task time.
+void saturateChains(const std::string &scene, const std::string &name, const std::vector<std::string> &params,
+                    int workers, int batch, double seconds, const ChainPayloads &payloads) {
+    test::farm::Farm farm("bench-saturate-chains");
+    test::farm::Process &master = farm.startMaster();
+    const PayloadFor payloadFor = [&](const v1::LeaseReply &lease) -> std::pair<const std::string *, uint64_t> {
+        const v1::TaskSpec &t = lease.task();
+        if (t.has_seeding()) return {&payloads.seeding.at(static_cast<size_t>(t.task_index())), 0};
+        if (t.has_image()) return {&payloads.direct, 0};
+        const size_t n = std::min<size_t>(1 + static_cast<size_t>(lease.more_size()), payloads.chainSums.size());
+        return {&payloads.chainSums[n - 1], 0};
+    };
+    const Saturated r = runSaturated(farm, master, workers, batch, payloadFor, [&] {
+        std::string args = "submit " + fs::absolute(scene).string() + " --integrator " + name + " --time " +
+                           std::to_string(seconds) + " --seed 1";
+        for (const std::string &p : params) args += " -P " + p;
+        return args;
+    });
+    const v1::ChainStats &c = r.job.chain();
+    const auto direct = static_cast<int64_t>(c.direct_samples_per_pixel());
+    const int64_t chainTasks = r.job.tasks().merged() - static_cast<int64_t>(c.seeding_tasks()) - direct;
+    const double n = static_cast<double>(std::max<int64_t>(1, chainTasks));
+    std::printf(
+        "chain saturation: %d fake workers, batches of %s (%.1f tasks per result), %s: %lld chain tasks (and %llu "
+        "seeding, %lld direct) in %.2f s\n",
+        workers, batch == farm::kAutoBatch ? "auto" : std::to_string(batch).c_str(),
+        static_cast<double>(r.leased) / static_cast<double>(std::max<int64_t>(1, r.returned)), name.c_str(),
+        static_cast<long long>(chainTasks), static_cast<unsigned long long>(c.seeding_tasks()),
+        static_cast<long long>(direct), r.wall);
+    std::printf("  master CPU:                %8.3f ms per chain task (the job's whole CPU over its chain tasks)\n",
+                1e3 * r.cpu / n);
+    std::printf("  chain tasks per CPU-second: %7.1f  (master CPU %.0f%% of one core; the machine may be shared)\n",
+                n / r.cpu, 100 * r.cpu / r.wall);
+    std::printf("  bytes per chain task:      %8.0f  (protobuf messages both ways)\n",
+                static_cast<double>(r.bytes) / n);
+    std::printf("  8-core workers per master:  %7.1f at chain tasks of %.3f core-seconds\n",
+                (n / r.cpu) * payloads.taskSeconds / 8, payloads.taskSeconds);
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -499,6 +609,7 @@ int main(int argc, char **argv) {
     bool fakeOnly = false;
     std::string chain;
     int chainTasks = 8;
+    double chainFarmSeconds = 0;
     std::vector<std::string> chainParams;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
@@ -526,6 +637,8 @@ int main(int argc, char **argv) {
             chain = argv[++i];
         } else if (a == "--chain-tasks" && value) {
             chainTasks = std::stoi(argv[++i]);
+        } else if (a == "--chain-farm" && value) {
+            chainFarmSeconds = std::stod(argv[++i]);
         } else if (a == "-P" && value) {
             chainParams.push_back(argv[++i]);
         } else if (a.rfind("--", 0) == 0) {
@@ -536,7 +649,11 @@ int main(int argc, char **argv) {
         }
     }
     if (!chain.empty()) {
-        chainResults(scene, chain, parseNameValues(chainParams, "-P"), chainTasks);
+        ChainPayloads payloads;
+        chainResults(scene, chain, parseNameValues(chainParams, "-P"), chainTasks, payloads);
+        if (chainFarmSeconds > 0)
+            for (const int batch : batches)
+                saturateChains(scene, chain, chainParams, fakeWorkers, batch, chainFarmSeconds, payloads);
         return 0;
     }
     const double sampleSeconds8 = fakeOnly ? 0 : realFarm(scene, res, spp);
