@@ -119,11 +119,15 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 j->retry.erase(task + i);
             }
             if (task >= j->chainFirst) j->countTime(work, count, stats);
+            const auto w = workers_.find(worker);
             if (const Clock::time_point leased = j->tasks[static_cast<size_t>(task)].leased;
-                leased != Clock::time_point{})
-                transferSeconds = std::max(0.0, std::chrono::duration<double>(Clock::now() - leased).count() -
-                                                    stats.seconds() - stats.scene_load_seconds());
-            if (const auto w = workers_.find(worker); w != workers_.end()) {
+                leased != Clock::time_point{}) {
+                const int threads = w != workers_.end() ? w->second->info.threads() : 1;
+                transferSeconds =
+                    std::max(0.0, std::chrono::duration<double>(Clock::now() - leased).count() -
+                                      renderWallSeconds(work, count, threads, stats) - stats.scene_load_seconds());
+            }
+            if (w != workers_.end()) {
                 WorkerRuntime &wr = *w->second;
                 for (const int64_t a : attempts) {
                     wr.attempts.erase(a);

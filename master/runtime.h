@@ -3,6 +3,7 @@
 // WorkerRuntime is under Master::mu_, except the JobFilm, which is under its own mutex (taken before mu_,
 // never after). Internal to the master; nothing outside master/ includes it.
 #pragma once
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <limits>
@@ -27,6 +28,15 @@ inline int64_t unixMs() {
 
 inline bool isActive(pathfarm::v1::JobState s) {
     return s == pathfarm::v1::JOB_QUEUED || s == pathfarm::v1::JOB_RUNNING;
+}
+
+// The wall time a result took its worker to render: TaskStats.seconds, except for a batch of chain tasks, whose
+// seconds are the sum over tasks that ran one per thread at once (on a worker of `threads` threads). The master
+// takes it from the time between lease and acceptance to find the result's transfer (JobRuntime::overheadSeconds).
+inline double renderWallSeconds(const pathfarm::v1::TaskSpec &work, int64_t tasks, int threads,
+                                const pathfarm::v1::TaskStats &stats) {
+    if (!work.has_chain() || tasks <= 1) return stats.seconds();
+    return stats.seconds() / static_cast<double>(std::min<int64_t>(tasks, std::max(threads, 1)));
 }
 
 // Size of every image task of a job; a time budget draws tasks as an unbounded spp budget does (so a timed

@@ -21,6 +21,7 @@
 #include "render/chain_job.h"
 #include "render/image_task.h"
 #include "render/normalizer.h"
+#include "runtime.h"
 #include "scene/scene.h"
 #include "support/process.h"
 
@@ -178,6 +179,22 @@ TEST(BatchGovernor, GrowsWhileBusyAndShrinksWhenIdle) {
         now += 1000ms;
         EXPECT_EQ(g.batch(now), expected) << "after a window with " << cpu << " CPU s";
     }
+}
+
+// What the master takes for a result's rendering time when it finds its transfer time: a batch of chain tasks ran
+// one per thread at once, so its summed seconds are divided by the tasks that ran side by side; anything else
+// rendered for its seconds.
+TEST(RenderWallSeconds, AChainBatchRanOnePerThread) {
+    v1::TaskStats stats;
+    stats.set_seconds(12);
+    v1::TaskSpec chain, image;
+    chain.mutable_chain();
+    image.mutable_image()->set_sample_count(8);
+    EXPECT_DOUBLE_EQ(master::renderWallSeconds(chain, 8, 4, stats), 3.0);
+    EXPECT_DOUBLE_EQ(master::renderWallSeconds(chain, 3, 4, stats), 4.0);   // three tasks on three of four threads
+    EXPECT_DOUBLE_EQ(master::renderWallSeconds(chain, 8, 0, stats), 12.0);  // threads unknown: one at a time
+    EXPECT_DOUBLE_EQ(master::renderWallSeconds(chain, 1, 4, stats), 12.0);
+    EXPECT_DOUBLE_EQ(master::renderWallSeconds(image, 8, 4, stats), 12.0);  // image batches render one after another
 }
 
 // A worker that leaves the batch to the master (the default) gets one task per lease from an idle master,
