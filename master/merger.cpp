@@ -63,7 +63,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
             }
         // A batch is merged as one task of its kind (an image task of all its samples, or a chain task's
         // result that counts as all of them): its tasks must follow each other and be batchable.
-        for (int64_t i = (count > 1 ? 0 : 1); i < count; ++i) {
+        for (int64_t i = 0; count > 1 && i < count; ++i) {
             const auto a = j->attemptTask.find(attempts[static_cast<size_t>(i)]);
             if (a == j->attemptTask.end() || a->second != task + i || !batchable(*j, a->second))
                 throw farm::FarmError(

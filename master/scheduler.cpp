@@ -86,8 +86,9 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
             const auto most = static_cast<size_t>(
                 maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : std::clamp(maxTasks, 1, kMaxBatchTasks));
             std::vector<int64_t> following;
-            for (int64_t want = first + 1; batchable(j, first) && 1 + following.size() < most &&
-                                           batchMayGrow(j, first, 1 + following.size(), w.info.threads());
+            const bool grows = batchable(j, first);
+            for (int64_t want = first + 1;
+                 grows && 1 + following.size() < most && batchMayGrow(j, first, 1 + following.size(), w.info.threads());
                  ++want) {
                 const std::optional<int64_t> next = nextTaskFor(j, w);
                 if (!next) break;

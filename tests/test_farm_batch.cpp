@@ -111,6 +111,19 @@ private:
     const ChainIntegrator &chains_;
 };
 
+// Leases a chain job's tasks one by one and delivers its seeding tasks' results (`payloads` set up from the first),
+// until `next` holds the first task after the seeding, still leased to `w`.
+void seedAndLeaseNext(FakeWorker &w, const std::string &scene, std::optional<ChainPayloads> &payloads,
+                      std::vector<v1::TaskSpec> &next) {
+    for (;;) {
+        next = w.leaseBatch(1);
+        ASSERT_EQ(next.size(), 1u);
+        if (!payloads) payloads.emplace(scene, next[0]);
+        if (!next[0].has_seeding()) return;
+        ASSERT_TRUE(w.complete(next[0].attempt_id(), payloads->payload(next)).accepted());
+    }
+}
+
 std::vector<int64_t> laterAttempts(const std::vector<v1::TaskSpec> &tasks) {
     std::vector<int64_t> out;
     for (size_t i = 1; i < tasks.size(); ++i) out.push_back(tasks[i].attempt_id());
@@ -409,15 +422,10 @@ TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
     const int64_t id = jobIdFrom(output);
     FakeWorker first(*farm), batcher(*farm);
     std::optional<ChainPayloads> payloads;
-    // The seeding, task by task, up to the first chain task, which `first` keeps.
+    // The seeding, then the first chain task (no direct component), which `first` keeps.
     std::vector<v1::TaskSpec> head;
-    for (;;) {
-        head = first.leaseBatch(1);
-        ASSERT_EQ(head.size(), 1u);
-        if (!payloads) payloads.emplace(scene, head[0]);
-        if (head[0].has_chain()) break;
-        ASSERT_TRUE(first.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
-    }
+    ASSERT_NO_FATAL_FAILURE(seedAndLeaseNext(first, scene, payloads, head));
+    ASSERT_TRUE(head[0].has_chain());
     const std::vector<v1::TaskSpec> batch = batcher.leaseBatch(3);
     ASSERT_EQ(batch.size(), 3u);
     for (size_t i = 0; i < batch.size(); ++i) {
@@ -458,13 +466,8 @@ TEST_F(FarmTest, ABatchOfADirectAndAChainTaskIsRefused) {
     FakeWorker w(*farm);
     std::optional<ChainPayloads> payloads;
     std::vector<v1::TaskSpec> direct;
-    for (;;) {
-        direct = w.leaseBatch(1);
-        ASSERT_EQ(direct.size(), 1u);
-        if (!payloads) payloads.emplace(scene, direct[0]);
-        if (direct[0].has_image()) break;
-        ASSERT_TRUE(w.complete(direct[0].attempt_id(), payloads->payload(direct)).accepted());
-    }
+    ASSERT_NO_FATAL_FAILURE(seedAndLeaseNext(w, scene, payloads, direct));
+    ASSERT_TRUE(direct[0].has_image());
     // The pass's direct task comes first, then its chain task; leased one by one, then claimed as a batch.
     const std::vector<v1::TaskSpec> chain = w.leaseBatch(1);
     ASSERT_EQ(chain.size(), 1u);

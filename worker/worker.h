@@ -1,10 +1,10 @@
 // The worker: registers with the master and pulls tasks. An image task renders on all its threads; seeding
 // and chain tasks run one per thread (a chain is sequential), so the worker holds up to --threads of them
-// at once, or a batch of chain tasks (chain_batch.h). Results stream back while the next tasks run. Leases are renewed
-// by a heartbeat thread; scenes are cached by bundle hash (on disk) and the last loaded scene is kept in memory. When
-// the master is away every call is retried with backoff, so a restarted master finds its workers again; a draining
-// worker stops retrying once the master has not answered for a lease time (its tasks are then another worker's) and
-// exits, reporting the results it could not deliver.
+// at once, or a batch of chain tasks (chain_batch.h). Results stream back while the next tasks run. Leases
+// are renewed by a heartbeat thread; scenes are cached by bundle hash (on disk) and the last loaded scene is
+// kept in memory. When the master is away every call is retried with backoff, so a restarted master finds its
+// workers again; a draining worker stops retrying once the master has not answered for a lease time (its
+// tasks are then another worker's) and exits, reporting the results it could not deliver.
 #pragma once
 #include <atomic>
 #include <condition_variable>
@@ -35,8 +35,9 @@ struct WorkerConfig {
     std::string cacheDir = "pathfarm-cache";
     int threads = 1;
     // Tasks leased at once and returned as one result (image tasks, or a chain job's chain tasks, merged here
-    // in task order), so that the master decodes and merges one film for all of them. 1: a result per task, whose merge
-    // on the master reproduces the embedded render bit for bit; a batch's sum rounds differently (in the last bits).
+    // in task order), so that the master decodes and merges one film for all of them. 1: a result per task,
+    // whose merge on the master reproduces the embedded render bit for bit; a batch's sum rounds differently
+    // (in the last bits).
     // farm::kAutoBatch: as many as the master chooses, which batches only while results keep it busy.
     int batch = farm::kAutoBatch;
     int maxMessageBytes = 4 << 20;  // until the master says otherwise
