@@ -578,8 +578,9 @@ void saturateChains(const std::string &scene, const std::string &name, const std
         return args;
     });
     const v1::ChainStats &c = r.job.chain();
-    const auto direct = static_cast<int64_t>(c.direct_samples_per_pixel());
-    const int64_t chainTasks = r.job.tasks().merged() - static_cast<int64_t>(c.seeding_tasks()) - direct;
+    // A finished job merged whole passes; its direct tasks hold one or more samples each (render/chain_job.h).
+    const auto chainTasks = static_cast<int64_t>(c.passes() * c.tasks_per_pass());
+    const int64_t direct = r.job.tasks().merged() - static_cast<int64_t>(c.seeding_tasks()) - chainTasks;
     const double n = static_cast<double>(std::max<int64_t>(1, chainTasks));
     std::printf(
         "chain saturation: %d fake workers, batches of %s (%.1f tasks per result), %s: %lld chain tasks (and %llu "

@@ -56,7 +56,7 @@ void Master::openChainFilm(JobRuntime &j, Loaded loaded, const ChainIntegrator &
     v1::ChainStats *stats = j.record.mutable_chain();
     if (stats->phase() == v1::CHAIN_PHASE_UNSPECIFIED) stats->set_phase(v1::CHAIN_PHASE_SEEDING);
     stats->set_seeding_tasks(job.seedingTaskCount());
-    stats->set_direct_tasks(static_cast<uint64_t>(job.directSamples()));
+    stats->set_direct_tasks(job.directTaskCount());
     stats->set_seeding_samples_per_pixel(j.seedingSpp);
     j.film.chain = std::move(state);
 }

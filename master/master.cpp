@@ -19,7 +19,7 @@ Master::Master(MasterConfig config)
                 (fs::path(cfg_.dataDir) / "bundles").string()),
                cfg_.maxBundleBytes),
       store_((fs::path(cfg_.dataDir) / "store.sqlite").string()),
-      batchGovernor_(cfg_.batchBusyShare, cfg_.batchWindow, kMaxBatchTasks) {
+      batchGovernor_(cfg_.batchBusyShare, cfg_.batchWindow, kMaxChainBatchTasks) {
     recover();
     reaper_ = std::thread([this] { reaperLoop(); });
 }

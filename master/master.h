@@ -128,12 +128,18 @@ public:
 
     // ---- workers ----
     pathfarm::v1::RegisterReply registerWorker(const pathfarm::v1::RegisterRequest &req, const std::string &peer);
-    // The most tasks one lease (and one batched result) holds.
+    // The most image tasks one lease (and one batched result) holds.
     static constexpr int kMaxBatchTasks = 64;
+    // The most chain tasks one lease holds. A chain task's film covers most of the image whatever its length
+    // (erpt at 1024²: 20 MB of tiles for 0.4 core-seconds), so a batch's result costs the master about as much
+    // as one task's, and only long batches let one master feed many workers: 64 tasks kept 11.5 eight-core
+    // workers per master core busy on erpt at 1024² (bench_farm part 6).
+    static constexpr int kMaxChainBatchTasks = 1024;
     // A task for this worker, waiting up to `wait` for one; empty when there is none (or the worker
     // drains). With maxTasks > 1, the tasks of its kind that follow it in its job too (image tasks of an image
-    // job, chain tasks of a chain job; up to maxTasks, capped at kMaxBatchTasks, as many as can be leased now),
-    // for a batched result; with farm::kAutoBatch, up to the governor's batch. Throws UnknownWorker.
+    // job, chain tasks of a chain job; up to maxTasks, capped at kMaxBatchTasks or kMaxChainBatchTasks, as many
+    // as can be leased now, and no more than the worker's share of a fixed budget's tasks not yet issued), for a
+    // batched result; with farm::kAutoBatch, up to the governor's batch. Throws UnknownWorker.
     std::vector<pathfarm::v1::TaskSpec> lease(const std::string &worker, std::chrono::milliseconds wait,
                                               int maxTasks = 1);
     // Renews the worker's leases; returns the attempts it no longer holds. Throws UnknownWorker.
@@ -200,6 +206,9 @@ private:
     // Whether task `index` of j may be part of a batch: an image job's whole tasks (not the partial last one),
     // a chain job's chain tasks (not its seeding or direct tasks).
     static bool batchable(const JobRuntime &j, int64_t index);
+    // The most tasks a batch of j's may hold for a worker that asked for maxTasks (farm::kAutoBatch: the
+    // governor's choice), before time budgets have their say (batchMayGrow).
+    size_t batchLimit(const JobRuntime &j, int maxTasks);
     // Whether a batch of the batchTasks tasks of j from firstTask, leased to a worker of `threads` threads, may
     // take one more (time budgets: if it still ends in time).
     bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks, int threads) const;

@@ -83,12 +83,10 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
             // kind in a row: the master merges in task order, and a chain job's tasks merge by kind.
             JobRuntime &j = *jobs_.at(tasks.front().job_id());
             const int64_t first = tasks.front().task_index();
-            const auto most = static_cast<size_t>(
-                maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : std::clamp(maxTasks, 1, kMaxBatchTasks));
+            const size_t most = batchable(j, first) ? batchLimit(j, maxTasks) : 1;
             std::vector<int64_t> following;
-            const bool grows = batchable(j, first);
             for (int64_t want = first + 1;
-                 grows && 1 + following.size() < most && batchMayGrow(j, first, 1 + following.size(), w.info.threads());
+                 1 + following.size() < most && batchMayGrow(j, first, 1 + following.size(), w.info.threads());
                  ++want) {
                 const std::optional<int64_t> next = nextTaskFor(j, w);
                 if (!next) break;
@@ -221,6 +219,22 @@ bool Master::batchable(const JobRuntime &j, int64_t index) {
     const v1::TaskSpec &work = j.tasks[static_cast<size_t>(index)].work;
     // A partial task is never batched: the merger merges an image batch as one task of all its samples.
     return j.chain ? work.has_chain() : work.image().tiles() == 0;
+}
+
+size_t Master::batchLimit(const JobRuntime &j, int maxTasks) {
+    const int asked = maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : maxTasks;
+    auto most = static_cast<int64_t>(std::clamp(asked, 1, j.chain ? kMaxChainBatchTasks : kMaxBatchTasks));
+    if (j.total > 0) {
+        // A budget in tasks: a batch holds at most its worker's share of the tasks not yet issued (its first
+        // task included). A master busy enough to batch long would otherwise lease a whole job of chain tasks
+        // to its first worker while the others wait.
+        int64_t live = 0;
+        for (const auto &[id, other] : workers_)
+            if (other->info.state() != v1::WORKER_LOST && !other->draining) ++live;
+        const int64_t left = j.total - static_cast<int64_t>(j.tasks.size()) + 1;
+        most = std::min(most, std::max<int64_t>(1, (left + live - 1) / std::max<int64_t>(live, 1)));
+    }
+    return static_cast<size_t>(most);
 }
 
 bool Master::batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks, int threads) const {

@@ -214,8 +214,8 @@ Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<
         const v1::ResultHeader header = farm::readResultHeader(read);
         spdlog::debug("attempt={} worker={}: CompleteTask, {} bytes", header.attempt_id(), header.worker_id(),
                       header.payload_size());
-        if (header.batch_attempt_ids_size() >= Master::kMaxBatchTasks)
-            throw farm::FarmError("CompleteTask: a batch of more than " + std::to_string(Master::kMaxBatchTasks) +
+        if (header.batch_attempt_ids_size() >= Master::kMaxChainBatchTasks)
+            throw farm::FarmError("CompleteTask: a batch of more than " + std::to_string(Master::kMaxChainBatchTasks) +
                                   " tasks");
         std::vector<int64_t> attempts{header.attempt_id()};
         attempts.insert(attempts.end(), header.batch_attempt_ids().begin(), header.batch_attempt_ids().end());

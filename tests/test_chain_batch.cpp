@@ -110,6 +110,41 @@ TEST_F(ChainBatchTest, ATaskWithoutAResultEndsTheRunBeforeIt) {
     EXPECT_TRUE(failed.finish(0, std::nullopt, 0).empty());
 }
 
+// A slow task may not make the results behind it pile up: once more than maxWaiting wait for it, it is set aside
+// and leaves as a run of its own, and the tasks after it form a run without it.
+TEST_F(ChainBatchTest, ASlowTaskIsSetAsideOnceTooManyResultsWaitForIt) {
+    ChainBatch batch({40, 41, 42, 43, 44, 45}, 2);
+    EXPECT_TRUE(batch.finish(1, result(2.0), 0).empty());
+    EXPECT_TRUE(batch.finish(2, result(3.0), 0).empty());
+    // A third result waiting for task 0: task 0 is set aside, and tasks 1-3 start the next run.
+    EXPECT_TRUE(batch.finish(3, result(4.0), 0).empty());
+    EXPECT_TRUE(batch.finish(5, result(6.0), 0).empty());
+    std::vector<ChainBatch::Run> runs = batch.finish(4, result(5.0), 0);
+    ASSERT_EQ(runs.size(), 1u);
+    EXPECT_EQ(runs[0].attempts, (std::vector<int64_t>{41, 42, 43, 44, 45}));
+    EXPECT_EQ(runs[0].sum.mutations, 200u);
+    ChainImage image(makeFilmBlock(*scene));
+    mergeChainResult(image, runs[0].sum, 5);
+    EXPECT_TRUE(sameSplats(image.film, merged({2.0, 3.0, 4.0, 5.0, 6.0})));
+    // Task 0 leaves alone when it ends, once.
+    runs = batch.finish(0, result(1.0), 0.5);
+    ASSERT_EQ(runs.size(), 1u);
+    EXPECT_EQ(runs[0].attempts, (std::vector<int64_t>{40}));
+    EXPECT_EQ(runs[0].sum.mutations, 10u);
+    EXPECT_DOUBLE_EQ(runs[0].loadSeconds, 0.5);
+    EXPECT_THROW(batch.finish(0, result(1.0), 0), std::logic_error);
+
+    // A task set aside that fails sends nothing; the run before it left when it was set aside.
+    ChainBatch failing({50, 51, 52, 53}, 1);
+    EXPECT_TRUE(failing.finish(0, result(1.0), 0).empty());
+    EXPECT_TRUE(failing.finish(2, result(3.0), 0).empty());
+    runs = failing.finish(3, result(4.0), 0);
+    ASSERT_EQ(runs.size(), 2u);
+    EXPECT_EQ(runs[0].attempts, (std::vector<int64_t>{50}));
+    EXPECT_EQ(runs[1].attempts, (std::vector<int64_t>{52, 53}));
+    EXPECT_TRUE(failing.finish(1, std::nullopt, 0).empty());
+}
+
 TEST_F(ChainBatchTest, OnlyTileFilmsOfOneCropWindowAdd) {
     ChainResult sum = result(1.0);
     ChainResult dense = result(2.0);

@@ -124,6 +124,15 @@ void seedAndLeaseNext(FakeWorker &w, const std::string &scene, std::optional<Cha
     }
 }
 
+// Starts the master and submits `spec` (with seed 4 and maxDepth 4) on the 32² test scene.
+void submitOnNewMaster(Farm &farm, const std::string &spec, std::string &scene, int64_t &id) {
+    farm.startMaster();
+    scene = writeTestScene(farm.dir() + "/scene", 32, 8);
+    const auto [code, output] = farm.cli("submit " + scene + " " + spec + " --seed 4 -P maxDepth=4");
+    ASSERT_EQ(code, 0) << output;
+    id = jobIdFrom(output);
+}
+
 std::vector<int64_t> laterAttempts(const std::vector<v1::TaskSpec> &tasks) {
     std::vector<int64_t> out;
     for (size_t i = 1; i < tasks.size(); ++i) out.push_back(tasks[i].attempt_id());
@@ -150,10 +159,10 @@ struct Job {
     int64_t id = -1;
 };
 
-// A batch size other than auto or 1..64 is refused at start-up with an error naming the flag, before the worker
+// A batch size other than auto or 1..1024 is refused at start-up with an error naming the flag, before the worker
 // connects anywhere.
 TEST(WorkerBatchFlag, OutOfRangeIsRefusedNamingTheFlag) {
-    for (const std::string bad : {"0", "65", "x"}) {
+    for (const std::string bad : {"0", "1025", "x"}) {
         const ProcessResult r = runCommand(std::string(PATHFARM_WORKER_BIN) +
                                            " --master 127.0.0.1:1 --token-file /dev/null --batch " + bad + " 2>&1");
         EXPECT_NE(r.exitCode, 0) << bad;
@@ -409,13 +418,52 @@ TEST_F(FarmTest, ATimedChainJobBatchesWholePassesMergedOnce) {
     EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0 AND job_id = " + std::to_string(id)), 0);
 }
 
+// A chain batch may hold more than an image batch's 64 tasks (a chain task's film covers most of the image, so only
+// long batches spare the master), and under a budget in tasks no more than its worker's share of the tasks not yet
+// issued: a master busy enough to batch long would otherwise lease a whole job to its first worker.
+TEST_F(FarmTest, AChainBatchHoldsUpToItsWorkersShareOfTheTasksLeft) {
+    // 32² pixels, one burst of 20 mutations each, in passes of 100: about 800 chain tasks.
+    std::string scene;
+    int64_t id = -1;
+    ASSERT_NO_FATAL_FAILURE(submitOnNewMaster(*farm,
+                                              "--integrator erpt --spp 1 -P luminanceSamples=2000 -P "
+                                              "directSamples=0 -P chainLength=20 -P passMutations=100",
+                                              scene, id));
+    FakeWorker first(*farm), second(*farm);
+    std::optional<ChainPayloads> payloads;
+    std::vector<v1::TaskSpec> head;
+    ASSERT_NO_FATAL_FAILURE(seedAndLeaseNext(first, scene, payloads, head));
+    ASSERT_TRUE(head[0].has_chain());
+    v1::GetJobRequest req;
+    req.set_id(id);
+    v1::Job job;
+    ASSERT_TRUE(farm->clientStub()->GetJob(farm->context(farm->clientToken()).get(), req, &job).ok());
+    const int64_t total = job.tasks().total();
+    ASSERT_GT(total - head[0].task_index(), 3 * master::Master::kMaxBatchTasks);
+    // The two workers take turns; each batch is half of what is left (rounded up), in a row.
+    int64_t next = head[0].task_index() + 1, batches = 0;
+    for (FakeWorker *w = &second; next < total; w = (w == &second ? &first : &second), ++batches) {
+        const std::vector<v1::TaskSpec> batch = w->leaseBatch(master::Master::kMaxChainBatchTasks);
+        ASSERT_EQ(static_cast<int64_t>(batch.size()), (total - next + 1) / 2) << "batch " << batches;
+        for (const v1::TaskSpec &t : batch) {
+            ASSERT_TRUE(t.has_chain());
+            ASSERT_EQ(t.task_index(), next++);
+        }
+        if (batches == 0) {
+            EXPECT_GT(batch.size(), static_cast<size_t>(master::Master::kMaxBatchTasks));
+        }
+    }
+    EXPECT_GT(batches, 5);
+}
+
 // A batch of chain tasks accepted ahead of its turn waits on disk through a master restart, is merged once as
 // the tasks it names, and the image equals the embedded render up to the batch's rounding.
 TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
     farm->startMaster(kFastLeases);
     const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    // Enough chain tasks that the batcher's share of those not yet issued (with `first` live) holds three.
     const std::string spec =
-        "--integrator mlt --spp 64 --seed 4 -P maxDepth=4 -P luminanceSamples=5000 -P directSamples=0";
+        "--integrator mlt --spp 256 --seed 4 -P maxDepth=4 -P luminanceSamples=5000 -P directSamples=0";
     const std::string ref = farm->embeddedRender(scene, spec, "ref");
     const auto [code, output] = farm->cli("submit " + scene + " " + spec);
     ASSERT_EQ(code, 0) << output;
@@ -457,12 +505,10 @@ TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
 // A chain job batches its chain tasks only: a result that names a direct-component task and the chain task after
 // it as one batch is refused as a bad request, and nothing of it is stored; each alone is taken.
 TEST_F(FarmTest, ABatchOfADirectAndAChainTaskIsRefused) {
-    farm->startMaster();
-    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
-    const auto [code, output] = farm->cli("submit " + scene +
-                                          " --integrator mlt --spp 64 --seed 4 -P maxDepth=4 -P luminanceSamples=5000"
-                                          " -P directSamples=1");
-    ASSERT_EQ(code, 0) << output;
+    std::string scene;
+    int64_t id = -1;
+    ASSERT_NO_FATAL_FAILURE(
+        submitOnNewMaster(*farm, "--integrator mlt --spp 64 -P luminanceSamples=5000 -P directSamples=1", scene, id));
     FakeWorker w(*farm);
     std::optional<ChainPayloads> payloads;
     std::vector<v1::TaskSpec> direct;

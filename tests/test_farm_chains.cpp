@@ -70,7 +70,7 @@ TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
         // split 80 x 80 pixels into 16 seeding tasks (render/seeding.cpp).
         const bool bursts = std::string(c.integrator) == "erpt";
         EXPECT_EQ(chain.seeding_tasks(), bursts ? 1u : 16u);
-        EXPECT_EQ(chain.direct_tasks(), 4u);  // one sample per pixel each, between the passes
+        EXPECT_EQ(chain.direct_tasks(), 4u);  // one sample per pixel each at 80², between the passes
         EXPECT_GT(chain.luminance(), 0);
         EXPECT_EQ(chain.candidates() > 0u, !bursts);
         EXPECT_GT(chain.mutations(), 0u);
@@ -106,6 +106,26 @@ TEST_F(FarmChains, ChainJobsMatchTheEmbeddedRenderBitForBit) {
         EXPECT_GT(job.tasks().total(), 3);
         expectMergedOnce(job.id(), job.tasks().total());
     }
+}
+
+// On a film of 2^18 pixels or more the direct component's tasks grow to several samples per pixel
+// (render/chain_job.h): at 512² to 2, so directSamples=4 makes tasks of 1, 1 and 2, which the farm merges to the
+// embedded render's bits.
+TEST_F(FarmChains, DirectTasksOfSeveralSamplesMatchTheEmbeddedRender) {
+    const std::string scene = writeTestScene(farm->dir() + "/scene", 512, 8);
+    farm->startMaster();
+    farm->startWorker(2);
+    std::string out, ref;
+    const v1::Job job = farm->submitMatchingEmbedded(
+        scene,
+        "--integrator erpt --spp 1 --seed 3 -P maxDepth=3 -P luminanceSamples=2000 -P directSamples=4 -P "
+        "chainLength=5",
+        out, ref);
+    EXPECT_EQ(job.chain().direct_tasks(), 3u);
+    EXPECT_EQ(job.chain().direct_samples_per_pixel(), 4);
+    EXPECT_EQ(job.chain().direct_samples(), 512u * 512u * 4u);
+    EXPECT_EQ(1 + 3 + job.chain().passes() * job.chain().tasks_per_pass(), static_cast<uint64_t>(job.tasks().total()));
+    expectMergedOnce(job.id(), job.tasks().total());
 }
 
 TEST_F(FarmChains, KilledWorkerAndRestartedMasterInTheChainPhaseDoNotChangeTheImage) {

@@ -4,10 +4,16 @@
 // film covers most of a 1024² image (erpt's tasks: 70-87% of its 8² tiles), so a batch's sum is barely larger
 // than one task's: the bytes on the wire and the master's decoding per task fall about as 1 / (tasks).
 // A task that fails or whose lease is lost ends the run before it; the tasks after it start a new run.
+// Results that end ahead of their turn wait for it, each with a film of most of the image. So that a slow task
+// cannot make them pile up (a batch may hold 1024 tasks), a task that holds up more than `maxWaiting` of them is
+// set aside: it leaves as a run of its own when it ends, and the runs before and after it go on without it. Which
+// tasks are set aside depends on timing, so such a batch's bits do too; every task is still merged once.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include "render/chain.h"
@@ -16,8 +22,8 @@ namespace pf::worker {
 
 class ChainBatch {
 public:
-    // The attempts of the batch's tasks, in task order.
-    explicit ChainBatch(std::vector<int64_t> attempts);
+    // The attempts of the batch's tasks, in task order; at most `maxWaiting` results wait for their turn.
+    explicit ChainBatch(std::vector<int64_t> attempts, size_t maxWaiting = std::numeric_limits<size_t>::max());
 
     // Results of tasks that follow each other, summed: the first task's attempt, then the others'.
     struct Run {
@@ -26,10 +32,15 @@ public:
         double loadSeconds = 0;
     };
     // Task `slot` ended, with its result or without one (it failed, or its lease was lost). Returns the runs
-    // that are complete now: those ended by a task without a result, and the last one once every task ended.
+    // that are complete now: those ended by a task without a result or set aside, a task set aside, and the last
+    // run once every task ended.
     std::vector<Run> finish(size_t slot, std::optional<ChainResult> result, double loadSeconds);
 
 private:
+    // Adds the tasks that ended in turn to the run, closing runs at tasks without a result.
+    void addInTurn(std::vector<Run> &done);
+    size_t waiting() const;
+
     struct Ended {
         std::optional<ChainResult> result;
         double loadSeconds = 0;
@@ -37,7 +48,9 @@ private:
     std::mutex mu_;
     std::vector<int64_t> attempts_;
     std::vector<std::optional<Ended>> ended_;  // tasks ended ahead of their turn wait here
-    size_t next_ = 0;                          // the first task not yet added to a run
+    size_t next_ = 0;                          // the first task not yet added to a run or set aside
+    size_t maxWaiting_;
+    std::set<size_t> setAside_;  // tasks that held up too many results and have not ended yet
     std::optional<Run> run_;
 };
 

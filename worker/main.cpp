@@ -40,10 +40,10 @@ int main(int argc, char **argv) {
     std::string batch = "auto";
     app.add_option("--batch", batch,
                    "Tasks leased at once and returned as one result (image tasks, or a Markov-chain job's chain "
-                   "tasks; less master CPU and fewer bytes per task): 1..64, or "
-                   "auto, where the master batches only while taking results keeps it busy. Only batches of one "
-                   "give an image equal to the embedded render bit for bit")
-        ->check(CLI::IsMember({"auto"}) | CLI::Range(1, 64))
+                   "tasks; less master CPU and fewer bytes per task): 1..1024 (the master holds image batches "
+                   "to 64 tasks), or auto, where the master batches only while taking results keeps it busy. Only "
+                   "batches of one give an image equal to the embedded render bit for bit")
+        ->check(CLI::IsMember({"auto"}) | CLI::Range(1, 1024))
         ->capture_default_str();
     app.add_flag("--fail-every-task", cfg.failEveryTask, "Test-only fault injection: fail every leased task")
         ->group("");

@@ -175,7 +175,10 @@ int Worker::run() {
         } else {
             std::vector<int64_t> attempts;
             for (const v1::TaskSpec &t : tasks) attempts.push_back(t.attempt_id());
-            const auto batch = std::make_shared<ChainBatch>(std::move(attempts));
+            // Results wait for their turn while the tasks before them still run: tasks of about equal length on
+            // `threads` threads keep fewer than `threads` waiting, and twice that means one task is slow.
+            const auto batch =
+                std::make_shared<ChainBatch>(std::move(attempts), 2 * static_cast<size_t>(std::max(cfg_.threads, 1)));
             for (size_t i = 0; i < tasks.size(); ++i) queued_.push_back({tasks[i], batch, i});
             changed_.notify_all();
         }

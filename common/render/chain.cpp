@@ -200,18 +200,21 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
         return t;
     };
     const uint64_t passLimit = opt.passes > 0 ? static_cast<uint64_t>(opt.passes) : UINT64_MAX;
-    // The clock's estimate of a pass: the direct and the chain tasks' mean times so far (each runs on one
-    // thread; passes differ: only some carry direct tasks, which at 1024² take a second or more), spread over
-    // the threads but no shorter than its longest task. Until a chain task has finished there is no estimate:
-    // once one chain task per thread has started (the first wave), the next pass waits for the first result.
+    // The clock's estimate of a pass: the chain tasks' mean time and the direct component's time per sample so
+    // far (each task runs on one thread; passes differ: only some carry direct tasks, which at 1024² take a
+    // second or more per sample, and direct tasks differ in samples, render/chain_job.h), spread over the threads
+    // but no shorter than its longest task. Until a chain task has finished there is no estimate: once one chain
+    // task per thread has started (the first wave), the next pass waits for the first result.
     double directSeconds = 0, chainSeconds = 0;
-    uint64_t directDone = 0, chainDone = 0, chainsClaimed = 0;
+    uint64_t directSamplesDone = 0, chainDone = 0, chainsClaimed = 0;
     const auto mean = [](double seconds, uint64_t n) { return n > 0 ? seconds / static_cast<double>(n) : 0.0; };
     uint64_t next = first, passes = 0, passStop = first;  // passStop: the end of the pass being claimed
-    const auto startsInTime = [&](uint64_t chains, uint64_t directs) {
-        const double d = mean(directSeconds, directDone), c = mean(chainSeconds, chainDone);
-        const double work = static_cast<double>(directs) * d + static_cast<double>(chains) * c;
-        const double estimate = std::max({work / threads, chains > 0 ? c : 0.0, directs > 0 ? d : 0.0});
+    // chains: the pass's chain tasks; directSamples, longestDirect: its direct tasks' samples, all and the most.
+    const auto startsInTime = [&](uint64_t chains, int64_t directSamples, int64_t longestDirect) {
+        const double d = mean(directSeconds, directSamplesDone), c = mean(chainSeconds, chainDone);
+        const double work = static_cast<double>(directSamples) * d + static_cast<double>(chains) * c;
+        const double estimate =
+            std::max({work / threads, chains > 0 ? c : 0.0, static_cast<double>(longestDirect) * d});
         return secondsSince(start) + estimate <= opt.timeLimit;
     };
     const auto claim = [&](bool &wait) -> std::optional<uint64_t> {
@@ -220,13 +223,22 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
             if (passes >= passLimit) return std::nullopt;
             const uint64_t e = passEnd(next);
             uint64_t chains = 0;
-            for (uint64_t t = next; t < e; ++t) chains += isChain(t);
+            int64_t directSamples = 0, longestDirect = 0;
+            for (uint64_t t = next; t < e; ++t) {
+                if (isChain(t)) {
+                    ++chains;
+                } else {
+                    const int64_t n = job.directTask(t).sampleCount;
+                    directSamples += n;
+                    longestDirect = std::max(longestDirect, n);
+                }
+            }
             if (timed && next > first && chains > 0 && chainDone == 0 &&
                 chainsClaimed >= static_cast<uint64_t>(threads)) {
                 wait = true;  // the first wave is out: wait for its first time
                 return std::nullopt;
             }
-            if (timed && next > first && !startsInTime(chains, e - next - chains)) return std::nullopt;
+            if (timed && next > first && !startsInTime(chains, directSamples, longestDirect)) return std::nullopt;
             passStop = e;
             ++passes;
         }
@@ -252,9 +264,10 @@ Bitmap ChainIntegrator::render(const Scene &scene, const RenderOptions &opt, Ren
             ++chainDone;
         } else {
             stats.rays += r.direct->rays;
-            job.mergeDirect(r.direct->block, job.directTask(t).sampleCount);
+            const int64_t samples = job.directTask(t).sampleCount;
+            job.mergeDirect(r.direct->block, samples);
             directSeconds += r.direct->seconds;
-            ++directDone;
+            directSamplesDone += static_cast<uint64_t>(samples);
         }
         if (t + 1 < count && !job.startsPass(t + 1)) return;
         char label[96];

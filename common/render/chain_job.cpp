@@ -31,6 +31,10 @@ ChainJob::ChainJob(const Scene &scene, const ChainIntegrator &integrator, uint64
       direct_(makeFilmBlock(scene)),
       chains_(makeFilmBlock(scene)) {
     if (integrator.directIntegrator() && integrator.directSamples() > 0) directSamples_ = integrator.directSamples();
+    const Film &film = scene.sensor().film();
+    const uint64_t pixels = static_cast<uint64_t>(film.cropWidth()) * static_cast<uint64_t>(film.cropHeight());
+    directChunk_ =
+        std::clamp<int64_t>(static_cast<int64_t>(pixels / kDirectChunkPixels), 1, std::max<int64_t>(1, directSamples_));
     // The pace of the direct component: its samples spread over the passes of the budget, or of the budget a
     // time budget's passes are planned for.
     const int64_t paceSpp = spp > 0 ? spp : integrator.timeBudgetPlan(scene);
@@ -47,15 +51,40 @@ uint64_t ChainJob::passCount() const {
 uint64_t ChainJob::directBefore(uint64_t pass) const {
     const uint64_t d = static_cast<uint64_t>(directSamples_);
     if (d == 0) return 0;
-    if (spp_ > 0 && pass >= passCount()) return d;
+    if (spp_ > 0 && pass >= passCount()) return directTasks(d);
     const uint64_t paced = ((pass + 1) * d + pacePasses_ - 1) / pacePasses_;
-    return spp_ > 0 ? std::min(d, paced) : paced;
+    return directTasks(spp_ > 0 ? std::min(d, paced) : paced);
+}
+
+uint64_t ChainJob::directSize(uint64_t task) const {
+    const auto c = static_cast<uint64_t>(directChunk_);
+    return task == 0 ? 1 : std::min(c, uint64_t(1) << std::min<uint64_t>(task - 1, 62));
+}
+
+uint64_t ChainJob::directStart(uint64_t task) const {
+    uint64_t start = 0;
+    for (uint64_t k = 0; k < task; ++k) {
+        const uint64_t size = directSize(k);
+        if (size == static_cast<uint64_t>(directChunk_)) return start + (task - k) * size;  // whole chunks from k on
+        start += size;
+    }
+    return start;
+}
+
+uint64_t ChainJob::directTasks(uint64_t samples) const {
+    uint64_t start = 0, k = 0;
+    for (; start < samples; ++k) {
+        const uint64_t size = directSize(k);
+        if (size == static_cast<uint64_t>(directChunk_)) return k + (samples - start + size - 1) / size;
+        start += size;
+    }
+    return k;
 }
 
 uint64_t ChainJob::taskCount() const {
     const uint64_t passes = passCount();
     if (passes == UINT64_MAX) return UINT64_MAX;
-    return firstChainTask() + passes * tasksPerPass() + static_cast<uint64_t>(directSamples_);
+    return firstChainTask() + passes * tasksPerPass() + directTaskCount();
 }
 
 ChainJob::Slot ChainJob::locate(uint64_t task) const {
@@ -86,7 +115,9 @@ ChainJob::Phase ChainJob::phaseOf(uint64_t task) const {
 ImageTask ChainJob::directTask(uint64_t task) const {
     const Slot s = locate(task);
     if (s.phase != Phase::Direct) throw std::logic_error("task " + std::to_string(task) + " is no direct task");
-    return {static_cast<int64_t>(s.ordinal), 1};
+    // A budget in samples ends with the samples left; a time budget's direct component has no end.
+    const auto first = static_cast<int64_t>(directStart(s.ordinal)), size = static_cast<int64_t>(directSize(s.ordinal));
+    return {first, spp_ > 0 ? std::min(size, directSamples_ - first) : size};
 }
 
 ChainTask ChainJob::chainTask(uint64_t task) const {

@@ -1,7 +1,7 @@
 // A Markov-chain render as one list of tasks in merge order (ARCHITECTURE.md "A job, end to end"): the
 // seeding tasks, then passes of chain tasks, each pass preceded by the image tasks of the direct component
-// (Mitsuba's directSamples, rendered without chains, one sample per pixel each) that its share of the
-// budget asks for. The chain tasks can only be formed once every seeding task is merged (they carry starts
+// (Mitsuba's directSamples, rendered without chains, one or more samples per pixel each) that its share of
+// the budget asks for. The chain tasks can only be formed once every seeding task is merged (they carry starts
 // resampled from the whole pool, ALGORITHMS.md §2.4, or the pilot's W for bursts). The embedded renderer
 // (ChainIntegrator::render) and the farm's master both drive a ChainJob, so they form the same tasks and
 // merge each component in the same order, which gives the same bits wherever the tasks ran.
@@ -12,6 +12,17 @@
 // budget, of a render of the budget it plans, ChainIntegrator::timeBudgetPlan; past those, the direct
 // component keeps that pace), at least one. A pass is the unit a time budget stops at
 // (ChainIntegrator::tasksPerPass); any whole number of direct samples and of passes gives an unbiased image.
+//
+// Direct tasks of several samples. A direct task's result is a dense film of the crop window whatever its
+// samples (22 MB on the wire at 1024²), and it cuts the row of chain tasks a farm worker may batch: at one sample
+// per task, an erpt job at 1024² sent its master a direct task after every 48 chain tasks, a third of its
+// results (bench_farm part 6). So its tasks grow: 1, 1, 2, 4, ... samples per pixel up to chunks of c, c = one per
+// kDirectChunkPixels pixels of the crop window (8 at 1024², 1 up to 362², at most the direct samples). A task is
+// issued as soon as the pace owes one of its samples, so the direct component runs ahead of the pace by less than
+// a task, which is never more than the samples issued before it: a short render keeps about the pace's share,
+// a long one sends whole chunks. (Held back instead until half a chunk of 8 was owed, the direct component of an
+// erpt --time 30 farm job at 1024² stayed at one sample and the image's relMSE came to 0.0114 against 0.0054;
+// chunks of 8 from the second task on cost an embedded render of the same budget a fifth of its mutations.)
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -22,6 +33,9 @@
 #include "render/normalizer.h"
 
 namespace pf {
+
+// Crop-window pixels per sample of a direct task's chunk (ChainJob::directChunk).
+constexpr uint64_t kDirectChunkPixels = uint64_t(1) << 17;
 
 // Runs image task `task` of the direct component of a job with seed `jobSeed`: the integrator's direct
 // component (integrators/path.h, makeDirectComponent) with a seed of its own, a stream apart from the seeding's
@@ -48,10 +62,14 @@ public:
     // The direct component's samples per pixel in a render of the budget (under a time budget: in one of
     // the budget it plans); 0 when there is none.
     int64_t directSamples() const { return directSamples_; }
+    // The most samples per pixel a direct task holds (the chunk the tasks grow to), and the direct tasks of a
+    // render of the budget.
+    int64_t directChunk() const { return directChunk_; }
+    uint64_t directTaskCount() const { return directTasks(static_cast<uint64_t>(directSamples_)); }
     const SeedingTask &seedingTask(uint64_t task) const { return seedingTasks_.at(task); }
     const SeedingConfig &seedingConfig() const { return config_; }
     // Tasks after the seeding exist once seeded(): how many in all (UINT64_MAX under a time budget), the
-    // phase of task `task` (>= firstChainTask()), the direct component's task (one sample per pixel) and
+    // phase of task `task` (>= firstChainTask()), the direct component's task (its samples) and
     // the chain task, and whether `task` is the first of a pass's tasks (its direct tasks included).
     bool seeded() const { return normalizer_.has_value(); }
     const Normalizer &normalizer() const { return *normalizer_; }
@@ -91,6 +109,11 @@ private:
     Slot locate(uint64_t task) const;
     // The direct tasks issued before the chain tasks of pass k (all of them once k reaches the passes).
     uint64_t directBefore(uint64_t pass) const;
+    // Direct task `task`'s samples per pixel (1, 1, 2, 4, ... up to directChunk_) and the samples of the tasks
+    // before it; the direct tasks that hold `samples` samples per pixel, the last one possibly in part.
+    uint64_t directSize(uint64_t task) const;
+    uint64_t directStart(uint64_t task) const;
+    uint64_t directTasks(uint64_t samples) const;
     uint64_t passCount() const;  // UINT64_MAX under a time budget
 
     const Scene &scene_;
@@ -99,7 +122,7 @@ private:
     int64_t spp_;
     SeedingConfig config_;
     std::vector<SeedingTask> seedingTasks_;
-    int64_t directSamples_ = 0;
+    int64_t directSamples_ = 0, directChunk_ = 1;
     uint64_t pacePasses_ = 1;             // P: the passes over which the direct samples are spread
     std::vector<SeedingResult> seeding_;  // merged so far, until the normalizer takes them
     std::optional<Normalizer> normalizer_;
