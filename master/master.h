@@ -79,7 +79,7 @@ struct MasterMetrics {
     uint64_t resultBytes = 0;      // their payloads on the wire
     int64_t lateResultsIgnored = 0;
     int64_t resultsLost = 0;  // stored results unreadable or failing their checksum, rendered again
-    int64_t attemptsExpired = 0, attemptsFailed = 0;
+    int64_t attemptsExpired = 0, attemptsFailed = 0, attemptsReleased = 0;
     int batchTasks = 1;  // the batch a worker with `--batch auto` gets now
 };
 
@@ -155,7 +155,9 @@ public:
                                          const pathfarm::v1::TaskStats &stats, const std::string &payload);
     // Refuses a result that checkAttempt() found stale, recording late results of superseded attempts.
     pathfarm::v1::CompleteReply ignoreResult(const std::string &worker, int64_t attempt, const std::string &reason);
-    void fail(const std::string &worker, int64_t attempt, const std::string &error);
+    // The attempt ended without a result: it failed (counted against the task and the worker), or, `released`, its
+    // draining worker gave it back unstarted.
+    void fail(const std::string &worker, int64_t attempt, const std::string &error, bool released = false);
 
 private:
     // The in-memory model of jobs, their tasks and films, and workers (runtime.h).
@@ -212,6 +214,8 @@ private:
     // Whether a batch of the batchTasks tasks of j from firstTask, leased to a worker of `threads` threads, may
     // take one more (time budgets: if it still ends in time).
     bool batchMayGrow(const JobRuntime &j, int64_t firstTask, size_t batchTasks, int threads) const;
+    // Ends the attempt in `state` and puts its task back in the queue; a failure is counted against the worker
+    // unless the attempt was released.
     void requeue(JobRuntime &j, int64_t task, const std::string &worker, const std::string &state,
                  const std::string &error, int64_t attempt);
     void countFailure(JobRuntime &j, const std::string &worker, const std::string &why);

@@ -100,6 +100,7 @@ void farmWide(Exposition &e, const MasterMetrics &m, const std::vector<v1::Job> 
     e.family("pathfarm_attempts_ended_total", "counter", "Attempts that ended without a result.");
     e.sample("pathfarm_attempts_ended_total", {{"reason", "expired"}}, static_cast<double>(m.attemptsExpired));
     e.sample("pathfarm_attempts_ended_total", {{"reason", "failed"}}, static_cast<double>(m.attemptsFailed));
+    e.sample("pathfarm_attempts_ended_total", {{"reason", "released"}}, static_cast<double>(m.attemptsReleased));
 }
 
 void perJob(Exposition &e, const std::vector<v1::Job> &jobs) {

@@ -339,18 +339,26 @@ void Master::requeue(JobRuntime &j, int64_t task, const std::string &worker, con
     TaskRuntime &t = j.tasks[static_cast<size_t>(task)];
     t.state = TaskRuntime::State::Pending;
     j.retry.insert(task);
-    countFailure(j, worker, error);
+    if (state != attempt_state::kReleased) countFailure(j, worker, error);
     touch();
     workChanged_.notify_all();
 }
 
-void Master::fail(const std::string &worker, int64_t attempt, const std::string &error) {
+void Master::fail(const std::string &worker, int64_t attempt, const std::string &error, bool released) {
     const std::lock_guard<std::mutex> lock(mu_);
     const auto l = leases_.find(attempt);
     if (l == leases_.end() || l->second.worker != worker) return;  // expired or superseded already
     JobRuntime &j = *jobs_.at(l->second.job);
     const int64_t task = l->second.task;
     const std::string message = error.substr(0, 4096);
+    if (released) {
+        // Never started: another worker takes it now rather than after its lease expires.
+        spdlog::info("job={} task={} attempt={} worker={}: given back unstarted: {}", j.record.id(), task, attempt,
+                     worker, message);
+        ++counters_.attemptsReleased;
+        requeue(j, task, worker, attempt_state::kReleased, message, attempt);
+        return;
+    }
     spdlog::warn("job={} task={} attempt={} worker={}: failed: {}", j.record.id(), task, attempt, worker, message);
     TaskRuntime &t = j.tasks[static_cast<size_t>(task)];
     ++t.failures;

@@ -233,7 +233,7 @@ Status WorkerService::CompleteTask(grpc::ServerContext *ctx, grpc::ServerReader<
 
 Status WorkerService::FailTask(grpc::ServerContext *ctx, const v1::FailTaskRequest *req, v1::FailTaskReply *) {
     return handle(ctx, token_, "FailTask", [&] {
-        master_.fail(req->worker_id(), req->attempt_id(), req->error());
+        master_.fail(req->worker_id(), req->attempt_id(), req->error(), req->released());
         return Status::OK;
     });
 }

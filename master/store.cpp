@@ -29,7 +29,7 @@ CREATE TABLE IF NOT EXISTS attempts (
   job_id INTEGER NOT NULL,
   task_idx INTEGER NOT NULL,
   worker_id TEXT NOT NULL,
-  state TEXT NOT NULL,                 -- leased, completed, failed, expired, cancelled, ignored
+  state TEXT NOT NULL,                 -- leased, completed, failed, expired, cancelled, ignored, released
   leased_ms INTEGER NOT NULL,
   finished_ms INTEGER,
   error TEXT NOT NULL DEFAULT ''

@@ -32,7 +32,7 @@ inline constexpr const char *kPending = "pending", *kLeased = "leased", *kAccept
 namespace attempt_state {
 // `ignored`: the attempt's result arrived after the task had been given to another attempt.
 inline constexpr const char *kLeased = "leased", *kCompleted = "completed", *kFailed = "failed", *kExpired = "expired",
-                            *kCancelled = "cancelled", *kIgnored = "ignored";
+                            *kCancelled = "cancelled", *kIgnored = "ignored", *kReleased = "released";
 }  // namespace attempt_state
 
 struct StoredJob {

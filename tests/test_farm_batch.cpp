@@ -6,6 +6,7 @@
 // worker's attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master restart
 // with a batch waiting for its turn, loses no work.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <cmath>
 
@@ -454,6 +455,50 @@ TEST_F(FarmTest, AChainBatchHoldsUpToItsWorkersShareOfTheTasksLeft) {
         }
     }
     EXPECT_GT(batches, 5);
+}
+
+// SIGTERM drains a worker that holds a batch: it finishes the task in hand, gives the ones it has not started back
+// (attempts `released`, no failure counted), delivers what it finished and exits at once; another worker renders
+// the rest, every task is merged once, and the image equals the embedded render up to rounding. `rendering` is the
+// worker's log line of a task of the batch's kind.
+void expectDrainGivesBackTheRestOfABatch(Farm &farm, int res, const std::string &spec, const std::string &rendering) {
+    const std::string scene = writeTestScene(farm.dir() + "/scene", res, 8);
+    farm.startMaster();
+    const std::string ref = farm.embeddedRender(scene, spec, "ref");
+    Process &worker = farm.startWorker(1, {"--batch", "16"});
+    const auto [code, output] = farm.cli("submit " + scene + " " + spec);
+    ASSERT_EQ(code, 0) << output;
+    const int64_t id = jobIdFrom(output);
+    ASSERT_TRUE(waitUntil([&] { return worker.log().find(rendering) != std::string::npos; }, 60s)) << worker.log();
+    worker.signal(SIGTERM);
+    const auto exitCode = worker.wait(60s);
+    ASSERT_TRUE(exitCode) << worker.log();
+    EXPECT_EQ(*exitCode, 0) << worker.log();
+    const std::string ofJob = " AND job_id = " + std::to_string(id);
+    EXPECT_GT(farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'released'" + ofJob), 0) << worker.log();
+    EXPECT_EQ(farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state IN ('failed', 'expired')" + ofJob), 0)
+        << worker.log();
+    EXPECT_GE(farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'completed'" + ofJob), 1) << worker.log();
+    farm.startWorker(2);
+    const v1::Job job = farm.waitForJob(id, 60s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm.master().log();
+    expectMergedOnce(farm, id, job.tasks().total());
+    const std::string out = farm.dir() + "/farm.exr";
+    const auto [fetched, log] = farm.cli("fetch " + std::to_string(id) + " -o " + out);
+    ASSERT_EQ(fetched, 0) << log;
+    expectEqualUpToRounding(ref, out);
+}
+
+TEST_F(FarmTest, ADrainingWorkerGivesBackTheUnstartedChainTasksOfItsBatch) {
+    // 4 rounds of 3 chain tasks of about 34000 mutations each (a few tenths of a second).
+    expectDrainGivesBackTheRestOfABatch(*farm, 64,
+                                        "--integrator erpt --spp 4 --seed 6 -P maxDepth=4 -P luminanceSamples=2000 "
+                                        "-P directSamples=0 -P passMutations=400000",
+                                        "rendering chain task");
+}
+
+TEST_F(FarmTest, ADrainingWorkerGivesBackTheUnstartedImageTasksOfItsBatch) {
+    expectDrainGivesBackTheRestOfABatch(*farm, 128, "--spp 256 --seed 6", "rendering samples");
 }
 
 // A batch of chain tasks accepted ahead of its turn waits on disk through a master restart, is merged once as

@@ -139,8 +139,10 @@ TEST_F(FarmChains, KilledWorkerAndRestartedMasterInTheChainPhaseDoNotChangeTheIm
     const int64_t id = jobIdFrom(output);
     const std::string job = std::to_string(id);
 
-    // A worker alone with the job is killed inside a chain task.
-    Process &victim = farm->startWorker(1);
+    // A worker alone with the job is killed inside a chain task. Its uploads wait a quarter of a second, so that the
+    // kill lands before the chain task's result is delivered even when the task (16384 mutations, tens of
+    // milliseconds) ends before this test sees its log line (a loaded suite run once saw no expired attempt).
+    Process &victim = farm->startWorker(1, {"--upload-delay", "0.25"});
     ASSERT_TRUE(waitUntil([&] { return victim.log().find("rendering chain task") != std::string::npos; }, 120s))
         << victim.log() << farm->master().log();
     victim.signal(SIGKILL);

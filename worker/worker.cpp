@@ -258,7 +258,12 @@ void Worker::runnerLoop() {
         queued_.pop_front();
         ++running_;
         lock.unlock();
-        if (q.batch) {
+        if (draining_) {
+            // A draining worker finishes what it started and gives the rest back, so that a long batch (up to
+            // 1024 chain tasks) does not hold up its exit; the runs its finished tasks complete leave now.
+            failTask(q.task.attempt_id(), "the worker is draining", true);
+            if (q.batch) uploadRuns(q.batch->finish(q.slot, std::nullopt, 0));
+        } else if (q.batch) {
             workInBatch(q);
         } else {
             work(q.task, 1);
@@ -322,6 +327,11 @@ void Worker::workBatch(const std::vector<v1::TaskSpec> &tasks, int threads) {
         sum.reset();
     };
     for (const v1::TaskSpec &task : tasks) {
+        if (draining_) {
+            flush();
+            failTask(task.attempt_id(), "the worker is draining", true);
+            continue;
+        }
         if (!mayRender(task)) {
             flush();
             continue;
@@ -376,7 +386,11 @@ void Worker::workInBatch(const Queued &q) {
         }
         if (result && !keepResult(task)) result.reset();
     }
-    for (ChainBatch::Run &run : q.batch->finish(q.slot, std::move(result), loadSeconds)) {
+    uploadRuns(q.batch->finish(q.slot, std::move(result), loadSeconds));
+}
+
+void Worker::uploadRuns(std::vector<ChainBatch::Run> runs) {
+    for (ChainBatch::Run &run : runs) {
         const ChainResult &c = run.sum;
         Result r{run.attempts.front(),
                  {run.attempts.begin() + 1, run.attempts.end()},
@@ -489,13 +503,18 @@ void Worker::fetchBundle(const std::string &hash) {
     }
 }
 
-void Worker::failTask(int64_t attempt, const std::string &error) {
-    spdlog::warn("attempt={} worker={}: failed: {}", attempt, workerId(), error);
+void Worker::failTask(int64_t attempt, const std::string &error, bool released) {
+    if (released) {
+        spdlog::info("attempt={} worker={}: given back: {}", attempt, workerId(), error);
+    } else {
+        spdlog::warn("attempt={} worker={}: failed: {}", attempt, workerId(), error);
+    }
     for (int step = 0;;) {
         v1::FailTaskRequest req;
         req.set_worker_id(workerId());
         req.set_attempt_id(attempt);
         req.set_error(error);
+        req.set_released(released);
         v1::FailTaskReply reply;
         const grpc::Status s = stub_->FailTask(context(std::chrono::seconds(10)).get(), req, &reply);
         if (!retryable(s)) heardFromMaster();

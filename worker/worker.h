@@ -106,7 +106,10 @@ private:
     void runnerLoop();
     std::shared_ptr<const Prepared> prepare(const pathfarm::v1::TaskSpec &task);
     void fetchBundle(const std::string &hash);
-    void failTask(int64_t attempt, const std::string &error);
+    // Tells the master the attempt ended without a result: it failed, or (`released`) it is given back unstarted.
+    void failTask(int64_t attempt, const std::string &error, bool released = false);
+    // Queues the runs of a chain batch that are complete for upload, each as one result.
+    void uploadRuns(std::vector<ChainBatch::Run> runs);
     // Delivers a result; false when it was abandoned (lease lost, refused, or the master gone while
     // draining).
     bool upload(const Result &r);
