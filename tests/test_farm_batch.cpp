@@ -419,6 +419,22 @@ TEST_F(FarmTest, ATimedChainJobBatchesWholePassesMergedOnce) {
     EXPECT_GT(farm->queryStore("SELECT COUNT(*) FROM results WHERE bytes = 0 AND job_id = " + std::to_string(id)), 0);
 }
 
+// An image batch holds at most 64 tasks even when the worker asks for the 1024 a chain batch may hold: an image
+// batch's bytes grow with its tasks' blocks.
+TEST_F(FarmTest, AnImageBatchHoldsAtMost64Tasks) {
+    std::string scene;
+    int64_t id = -1;
+    // 65536 samples per pixel in tasks of at most 256 (the master's largest task): over 256 tasks.
+    ASSERT_NO_FATAL_FAILURE(submitOnNewMaster(*farm, "--integrator path --spp 65536", scene, id));
+    FakeWorker w(*farm);
+    const std::vector<v1::TaskSpec> batch = w.leaseBatch(master::Master::kMaxChainBatchTasks);
+    ASSERT_EQ(batch.size(), static_cast<size_t>(master::Master::kMaxBatchTasks));
+    for (size_t i = 0; i < batch.size(); ++i) {
+        EXPECT_TRUE(batch[i].has_image());
+        EXPECT_EQ(batch[i].task_index(), batch[0].task_index() + static_cast<int64_t>(i));
+    }
+}
+
 // A chain batch may hold more than an image batch's 64 tasks (a chain task's film covers most of the image, so only
 // long batches spare the master), and under a budget in tasks no more than its worker's share of the tasks not yet
 // issued: a master busy enough to batch long would otherwise lease a whole job to its first worker.
