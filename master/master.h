@@ -208,6 +208,9 @@ private:
     // Whether task `index` of j may be part of a batch: an image job's whole tasks (not the partial last one),
     // a chain job's chain tasks (not its seeding or direct tasks).
     static bool batchable(const JobRuntime &j, int64_t index);
+    // Whether worker w may take j's tasks: it runs j's integrator (its `algorithms`, if it lists any) and is not
+    // blocklisted for j.
+    static bool mayRun(const JobRuntime &j, const WorkerRuntime &w);
     // The most tasks a batch of j's may hold for a worker that asked for maxTasks (farm::kAutoBatch: the
     // governor's choice), before time budgets have their say (batchMayGrow).
     size_t batchLimit(const JobRuntime &j, int maxTasks);

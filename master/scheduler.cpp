@@ -116,11 +116,9 @@ std::optional<v1::TaskSpec> Master::pickTask(WorkerRuntime &w) {
     std::stable_sort(order.begin(), order.end(), [](const JobRuntime *a, const JobRuntime *b) {
         return a->record.spec().priority() > b->record.spec().priority();
     });
-    const auto &algs = w.info.algorithms();
     for (JobRuntime *jp : order) {
         JobRuntime &j = *jp;
-        if (j.blocklist.count(w.info.id())) continue;
-        if (!algs.empty() && std::find(algs.begin(), algs.end(), j.record.integrator()) == algs.end()) continue;
+        if (!mayRun(j, w)) continue;
         const std::optional<int64_t> index = nextTaskFor(j, w);
         if (!index) continue;
         return std::move(leaseIndices(j, w, {*index}).front());
@@ -221,16 +219,22 @@ bool Master::batchable(const JobRuntime &j, int64_t index) {
     return j.chain ? work.has_chain() : work.image().tiles() == 0;
 }
 
+bool Master::mayRun(const JobRuntime &j, const WorkerRuntime &w) {
+    const auto &algs = w.info.algorithms();
+    return !j.blocklist.count(w.info.id()) &&
+           (algs.empty() || std::find(algs.begin(), algs.end(), j.record.integrator()) != algs.end());
+}
+
 size_t Master::batchLimit(const JobRuntime &j, int maxTasks) {
     const int asked = maxTasks == farm::kAutoBatch ? batchGovernor_.batch() : maxTasks;
     auto most = static_cast<int64_t>(std::clamp(asked, 1, j.chain ? kMaxChainBatchTasks : kMaxBatchTasks));
     if (j.total > 0) {
         // A budget in tasks: a batch holds at most its worker's share of the tasks not yet issued (its first
-        // task included). A master busy enough to batch long would otherwise lease a whole job of chain tasks
-        // to its first worker while the others wait.
+        // task included), shared among the live workers that may run them. A master busy enough to batch long
+        // would otherwise lease a whole job of chain tasks to its first worker while the others wait.
         int64_t live = 0;
         for (const auto &[id, other] : workers_)
-            if (other->info.state() != v1::WORKER_LOST && !other->draining) ++live;
+            if (other->info.state() != v1::WORKER_LOST && !other->draining && mayRun(j, *other)) ++live;
         const int64_t left = j.total - static_cast<int64_t>(j.tasks.size()) + 1;
         most = std::min(most, std::max<int64_t>(1, (left + live - 1) / std::max<int64_t>(live, 1)));
     }

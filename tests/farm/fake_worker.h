@@ -12,9 +12,12 @@ namespace pf::test::farm {
 
 class FakeWorker {
 public:
-    explicit FakeWorker(const Farm &farm) : farm_(farm), stub_(farm.workerStub(64 << 20)) {
+    // `algorithms`: the integrators it runs (empty: all).
+    explicit FakeWorker(const Farm &farm, const std::vector<std::string> &algorithms = {})
+        : farm_(farm), stub_(farm.workerStub(64 << 20)) {
         pathfarm::v1::RegisterRequest req;
         req.set_name("fake");
+        for (const std::string &a : algorithms) req.add_algorithms(a);
         pathfarm::v1::RegisterReply reply;
         EXPECT_TRUE(stub_->Register(ctx().get(), req, &reply).ok());
         id_ = reply.worker_id();
