@@ -435,21 +435,22 @@ TEST_F(FarmTest, AnImageBatchHoldsAtMost64Tasks) {
     }
 }
 
-// An erpt job of about 800 chain tasks on a new master (32² pixels, one burst of 20 mutations each, in passes of
-// 100), and the fake workers `make` registers: `seed` delivers the seeding and leases the first chain task, whose
-// index `seed` returns in `first`; `total` is the job's task count.
-template <class MakeWorkers>
-void manyChainTasks(Farm &farm, MakeWorkers make, int64_t &first, int64_t &total) {
-    std::string scene;
-    int64_t id = -1;
+// Submits an erpt job of about 800 chain tasks on a new master: 32² pixels, one burst of 20 mutations each, in
+// passes of 100.
+void submitManyChainTasks(Farm &farm, std::string &scene, int64_t &id) {
     ASSERT_NO_FATAL_FAILURE(submitOnNewMaster(farm,
                                               "--integrator erpt --spp 1 -P luminanceSamples=2000 -P "
                                               "directSamples=0 -P chainLength=20 -P passMutations=100",
                                               scene, id));
-    FakeWorker &seed = make();
+}
+
+// Delivers job `id`'s seeding through `w` and leases its first chain task to `w`: that task's index, and the job's
+// task count.
+void seedFirstChainTask(const Farm &farm, FakeWorker &w, const std::string &scene, int64_t id, int64_t &first,
+                        int64_t &total) {
     std::optional<ChainPayloads> payloads;
     std::vector<v1::TaskSpec> head;
-    ASSERT_NO_FATAL_FAILURE(seedAndLeaseNext(seed, scene, payloads, head));
+    ASSERT_NO_FATAL_FAILURE(seedAndLeaseNext(w, scene, payloads, head));
     ASSERT_TRUE(head[0].has_chain());
     v1::GetJobRequest req;
     req.set_id(id);
@@ -463,19 +464,15 @@ void manyChainTasks(Farm &farm, MakeWorkers make, int64_t &first, int64_t &total
 // long batches spare the master), and under a budget in tasks no more than its worker's share of the tasks not yet
 // issued: a master busy enough to batch long would otherwise lease a whole job to its first worker.
 TEST_F(FarmTest, AChainBatchHoldsUpToItsWorkersShareOfTheTasksLeft) {
-    std::optional<FakeWorker> first, second;
-    int64_t head = -1, total = 0;
-    ASSERT_NO_FATAL_FAILURE(manyChainTasks(
-        *farm,
-        [&]() -> FakeWorker & {
-            second.emplace(*farm);
-            return first.emplace(*farm);
-        },
-        head, total));
+    std::string scene;
+    int64_t id = -1, head = -1, total = 0;
+    ASSERT_NO_FATAL_FAILURE(submitManyChainTasks(*farm, scene, id));
+    FakeWorker first(*farm), second(*farm);
+    ASSERT_NO_FATAL_FAILURE(seedFirstChainTask(*farm, first, scene, id, head, total));
     ASSERT_GT(total - head, 3 * master::Master::kMaxBatchTasks);
     // The two workers take turns; each batch is half of what is left (rounded up), in a row.
     int64_t next = head + 1, batches = 0;
-    for (FakeWorker *w = &*second; next < total; w = (w == &*second ? &*first : &*second), ++batches) {
+    for (FakeWorker *w = &second; next < total; w = (w == &second ? &first : &second), ++batches) {
         const std::vector<v1::TaskSpec> batch = w->leaseBatch(master::Master::kMaxChainBatchTasks);
         ASSERT_EQ(static_cast<int64_t>(batch.size()), (total - next + 1) / 2) << "batch " << batches;
         for (const v1::TaskSpec &t : batch) {
@@ -492,18 +489,14 @@ TEST_F(FarmTest, AChainBatchHoldsUpToItsWorkersShareOfTheTasksLeft) {
 // The share counts only the workers that may run the job: a worker that runs other integrators only (or is
 // blocklisted for the job) takes none of its tasks, so it does not halve the others' batches.
 TEST_F(FarmTest, WorkersThatCannotRunAJobDoNotShrinkItsBatches) {
-    std::optional<FakeWorker> batcher, pathOnly;
-    int64_t head = -1, total = 0;
-    ASSERT_NO_FATAL_FAILURE(manyChainTasks(
-        *farm,
-        [&]() -> FakeWorker & {
-            pathOnly.emplace(*farm, std::vector<std::string>{"path"});
-            return batcher.emplace(*farm);
-        },
-        head, total));
+    std::string scene;
+    int64_t id = -1, head = -1, total = 0;
+    ASSERT_NO_FATAL_FAILURE(submitManyChainTasks(*farm, scene, id));
+    FakeWorker batcher(*farm), pathOnly(*farm, {"path"});
+    ASSERT_NO_FATAL_FAILURE(seedFirstChainTask(*farm, batcher, scene, id, head, total));
     const int64_t left = total - head - 1;
     ASSERT_LE(left, master::Master::kMaxChainBatchTasks);
-    EXPECT_EQ(static_cast<int64_t>(batcher->leaseBatch(master::Master::kMaxChainBatchTasks).size()), left);
+    EXPECT_EQ(static_cast<int64_t>(batcher.leaseBatch(master::Master::kMaxChainBatchTasks).size()), left);
 }
 
 // SIGTERM drains a worker that holds a batch: it finishes the task in hand, gives the ones it has not started back
