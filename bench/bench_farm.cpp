@@ -37,9 +37,9 @@
 //    the master's decode + merge.
 // 6. --chain-farm S (after 5): a chain job of integrator NAME under --time S at the scene's own size, on a fresh
 //    master with N fake workers (part 4's) that return part 5's results at once (a batch of n chain tasks: the
-//    sum of the first min(n, K)), once per --fake-batch size: the master's CPU per chain task (its whole CPU,
-//    seeding and direct tasks included, over the chain tasks) and the 8-core workers one master core keeps busy
-//    at part 5's mean chain task time.
+//    sum of the first min(n, K)), once per --fake-batch size: tasks per result (all, and chain tasks per chain
+//    result), the master's CPU per chain task (its whole CPU, seeding and direct tasks included, over the chain
+//    tasks) and the 8-core workers one master core keeps busy at part 5's mean chain task time.
 #include <unistd.h>
 
 #include <atomic>
@@ -582,11 +582,14 @@ void saturateChains(const std::string &scene, const std::string &name, const std
     const auto chainTasks = static_cast<int64_t>(c.passes() * c.tasks_per_pass());
     const int64_t direct = r.job.tasks().merged() - static_cast<int64_t>(c.seeding_tasks()) - chainTasks;
     const double n = static_cast<double>(std::max<int64_t>(1, chainTasks));
+    // Seeding and direct tasks are never batched: the other results are the chain tasks'.
+    const int64_t chainResults = r.returned - static_cast<int64_t>(c.seeding_tasks()) - direct;
     std::printf(
-        "chain saturation: %d fake workers, batches of %s (%.1f tasks per result), %s: %lld chain tasks (and %llu "
-        "seeding, %lld direct) in %.2f s\n",
+        "chain saturation: %d fake workers, batches of %s (%.1f tasks per result, %.1f per chain result), %s: %lld "
+        "chain tasks (and %llu seeding, %lld direct) in %.2f s\n",
         workers, batch == farm::kAutoBatch ? "auto" : std::to_string(batch).c_str(),
-        static_cast<double>(r.leased) / static_cast<double>(std::max<int64_t>(1, r.returned)), name.c_str(),
+        static_cast<double>(r.leased) / static_cast<double>(std::max<int64_t>(1, r.returned)),
+        static_cast<double>(chainTasks) / static_cast<double>(std::max<int64_t>(1, chainResults)), name.c_str(),
         static_cast<long long>(chainTasks), static_cast<unsigned long long>(c.seeding_tasks()),
         static_cast<long long>(direct), r.wall);
     std::printf("  master CPU:                %8.3f ms per chain task (the job's whole CPU over its chain tasks)\n",

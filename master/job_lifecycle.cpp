@@ -221,20 +221,25 @@ void Master::recoverJob(const StoredJob &stored) {
             (j.tasks[i].state == TaskRuntime::State::Leased && !leases_.count(j.tasks[i].attempt)))
             j.retry.insert(static_cast<int64_t>(i));
     for (const std::string &w : store_.loadBlocklist(id)) j.blocklist.insert(w);
+    // The later tasks of a batched result share its file: they join their first task's entry (a chain batch's
+    // row may pass direct tasks, whose results come between).
+    std::map<std::string, int64_t> batchOfFile;
     for (const StoredResult &r : store_.loadUnmergedResults(id)) {
         const v1::TaskSpec &work = j.tasks.at(static_cast<size_t>(r.taskIndex)).work;
-        // The later tasks of a batched result share its file: they join their first task's entry.
-        if (const auto last = j.film.pending.rbegin(); last != j.film.pending.rend() && last->second.file == r.file &&
-                                                       last->first + last->second.tasks == r.taskIndex) {
-            if (work.has_image()) {
-                v1::ImageTask &batch = *last->second.work.mutable_image();
-                batch.set_sample_count(batch.sample_count() + work.image().sample_count());
+        if (const auto b = batchOfFile.find(r.file); b != batchOfFile.end()) {
+            JobFilm::Pending &batch = j.film.pending.at(b->second);
+            if (batchRow(j, batch.tasks.back(), 2).back() == r.taskIndex) {
+                if (work.has_image()) {
+                    v1::ImageTask &image = *batch.work.mutable_image();
+                    image.set_sample_count(image.sample_count() + work.image().sample_count());
+                }
+                batch.tasks.push_back(r.taskIndex);
+                j.countTime(work, 1, v1::TaskStats());  // the batch's time came with its first task
+                continue;
             }
-            ++last->second.tasks;
-            j.countTime(work, 1, v1::TaskStats());  // the batch's time came with its first task
-            continue;
         }
-        j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0};
+        j.film.pending[r.taskIndex] = {r.file, r.stats, work, std::nullopt, 0, {r.taskIndex}};
+        batchOfFile[r.file] = r.taskIndex;
         if (r.taskIndex >= j.chainFirst) j.countTime(work, 1, r.stats);
     }
     if (j.chain && j.film.chain->job->seeded()) startChains(j);

@@ -149,7 +149,7 @@ public:
     // Upper bound of a result payload for `attempt` (decoded size plus zstd's worst case).
     uint64_t maxPayloadBytes(int64_t attempt) const;
     // Takes a result: validates and stores it, then merges every result that is next in task order. A
-    // batched result names several attempts: image tasks of one job that follow each other, in order
+    // batched result names several attempts: the tasks of one of the job's batch rows (batchRow), in order
     // (else farm::FarmError); it is taken whole or not at all, and merged once as one result.
     pathfarm::v1::CompleteReply complete(const std::string &worker, const std::vector<int64_t> &attempts,
                                          const pathfarm::v1::TaskStats &stats, const std::string &payload);
@@ -208,6 +208,10 @@ private:
     // Whether task `index` of j may be part of a batch: an image job's whole tasks (not the partial last one),
     // a chain job's chain tasks (not its seeding or direct tasks).
     static bool batchable(const JobRuntime &j, int64_t index);
+    // The tasks of a batch of `count` tasks from `first`, in order: an image job's follow each other; a chain
+    // job's are its chain tasks from `first` on, past the direct tasks between them (lease leaves those to the
+    // next request, so that they do not cut a worker's row of chain tasks). Shorter where the issued tasks end.
+    static std::vector<int64_t> batchRow(const JobRuntime &j, int64_t first, size_t count);
     // Whether worker w may take j's tasks: it runs j's integrator (its `algorithms`, if it lists any) and is not
     // blocklisted for j.
     static bool mayRun(const JobRuntime &j, const WorkerRuntime &w);
@@ -234,8 +238,8 @@ private:
     static size_t heldBytes(const TaskOutput &output);
     // Merges the result of `tasks` tasks (a batch: more than one) that starts with `work`'s.
     void mergeOutput(JobRuntime &j, const pathfarm::v1::TaskSpec &work, TaskOutput output, int64_t tasks);
-    // The pending result of tasks [task, task + count) is lost: they go back to the queue (takes mu_).
-    void discardResult(JobRuntime &j, int64_t task, int64_t count, const std::string &file);
+    // The pending result of `tasks` is lost: they go back to the queue (takes mu_).
+    void discardResult(JobRuntime &j, const std::vector<int64_t> &tasks, const std::string &file);
     // Logs a failed write of the job's film files once per distinct fault.
     void storageFault(JobRuntime &j, const char *what, const std::exception &e);
     // Throws StorageError.

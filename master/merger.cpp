@@ -53,6 +53,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
     JobRuntime *j = nullptr;
     int64_t task = 0;
     v1::TaskSpec work;
+    std::vector<int64_t> row;  // the result's tasks
     {
         const std::lock_guard<std::mutex> lock(mu_);
         for (auto &[id, job] : jobs_)
@@ -62,15 +63,18 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
                 work = j->tasks[static_cast<size_t>(task)].work;
             }
         // A batch is merged as one task of its kind (an image task of all its samples, or a chain task's
-        // result that counts as all of them): its tasks must follow each other and be batchable.
+        // result that counts as all of them): its tasks must be the batchable ones of a row (batchRow).
+        row = batchRow(*j, task, static_cast<size_t>(count));
         for (int64_t i = 0; count > 1 && i < count; ++i) {
             const auto a = j->attemptTask.find(attempts[static_cast<size_t>(i)]);
-            if (a == j->attemptTask.end() || a->second != task + i || !batchable(*j, a->second))
-                throw farm::FarmError(
-                    "CompleteTask: batched attempt " + std::to_string(attempts[static_cast<size_t>(i)]) + " is not " +
-                    (j->chain ? "chain" : "image") + " task " + std::to_string(task + i) + " of job " +
-                    std::to_string(j->record.id()) + " (a batch holds the tasks after attempt " +
-                    std::to_string(attempt) + "'s in order)");
+            const size_t at = static_cast<size_t>(i);
+            if (a == j->attemptTask.end() || at >= row.size() || a->second != row[at] || !batchable(*j, a->second))
+                throw farm::FarmError("CompleteTask: batched attempt " + std::to_string(attempts[at]) + " is not " +
+                                      (j->chain ? "chain" : "image") + " task " +
+                                      (at < row.size() ? std::to_string(row[at]) : "beyond the last issued") +
+                                      " of job " + std::to_string(j->record.id()) +
+                                      " (a batch holds the tasks after attempt " + std::to_string(attempt) +
+                                      "'s in order)");
             if (i > 0 && work.has_image()) {
                 const auto &next = j->tasks[static_cast<size_t>(a->second)].work.image();
                 work.mutable_image()->set_sample_count(work.image().sample_count() + next.sample_count());
@@ -99,7 +103,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
         const std::lock_guard<std::mutex> lock(mu_);
         // The leases may have expired or the job ended while the payload was on its way.
         for (int64_t i = 0; i < count; ++i) {
-            const TaskRuntime &t = j->tasks[static_cast<size_t>(task + i)];
+            const TaskRuntime &t = j->tasks[static_cast<size_t>(row[static_cast<size_t>(i)])];
             accepted &= isActive(j->record.state()) && t.attempt == attempts[static_cast<size_t>(i)] &&
                         t.state != TaskRuntime::State::Accepted && t.state != TaskRuntime::State::Merged;
         }
@@ -107,16 +111,16 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
             fs::remove(file);
         } else {
             try {
-                store_.acceptResult(jobId, task, attempts, file.string(), payload.size(), stats, unixMs());
+                store_.acceptResult(jobId, row, attempts, file.string(), payload.size(), stats, unixMs());
             } catch (const StorageError &) {
                 std::error_code ec;
                 fs::remove(file, ec);
                 throw;
             }
             for (int64_t i = 0; i < count; ++i) {
-                j->tasks[static_cast<size_t>(task + i)].state = TaskRuntime::State::Accepted;
+                j->tasks[static_cast<size_t>(row[static_cast<size_t>(i)])].state = TaskRuntime::State::Accepted;
                 leases_.erase(attempts[static_cast<size_t>(i)]);
-                j->retry.erase(task + i);
+                j->retry.erase(row[static_cast<size_t>(i)]);
             }
             if (task >= j->chainFirst) j->countTime(work, count, stats);
             const auto w = workers_.find(worker);
@@ -153,7 +157,7 @@ v1::CompleteReply Master::complete(const std::string &worker, const std::vector<
     {
         const std::lock_guard<std::mutex> filmLock(j->film.mu);
         JobFilm &f = j->film;
-        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0, count, transferSeconds};
+        JobFilm::Pending &p = f.pending[task] = {file.string(), stats, work, std::nullopt, 0, row, transferSeconds};
         if (task == f.merged) {
             mergeReady(*j, std::make_optional(std::make_pair(task, std::move(*output))));
         } else if (const size_t bytes = heldBytes(*output); bytes > 0 && f.heldBytes + bytes <= JobFilm::kHeldBytes) {
@@ -248,12 +252,12 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
                 // The master's own file is unreadable, truncated or damaged; the task is reproducible.
                 spdlog::warn("job={} task={}: stored result lost ({}): rendering the task again", j.record.id(),
                              f.merged, e.what());
-                discardResult(j, f.merged, it->second.tasks, it->second.file);
+                discardResult(j, it->second.tasks, it->second.file);
                 f.pending.erase(it);
                 continue;
             }
         }
-        mergeOutput(j, work, std::move(*output), it->second.tasks);
+        mergeOutput(j, work, std::move(*output), static_cast<int64_t>(it->second.tasks.size()));
         const double mergeSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
         seconds += mergeSeconds;
         if (f.merged >= j.chainFirst && it->second.transferSeconds >= 0) {
@@ -267,7 +271,10 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
         rays += it->second.stats.rays();
         loadSeconds += it->second.stats.scene_load_seconds();
         if (!work.has_seeding()) f.mergedSinceCheckpoint.push_back(it->second.file);
-        f.merged += it->second.tasks;
+        f.mergedAhead.insert(it->second.tasks.begin(), it->second.tasks.end());
+        for (auto next = f.mergedAhead.begin(); next != f.mergedAhead.end() && *next == f.merged;
+             next = f.mergedAhead.erase(next))
+            ++f.merged;
         f.pending.erase(it);
     }
     if (f.merged == before) return;
@@ -312,11 +319,11 @@ void Master::mergeReady(JobRuntime &j, std::optional<std::pair<int64_t, TaskOutp
     }
 }
 
-void Master::discardResult(JobRuntime &j, int64_t task, int64_t count, const std::string &file) {
+void Master::discardResult(JobRuntime &j, const std::vector<int64_t> &tasks, const std::string &file) {
     const std::lock_guard<std::mutex> lock(mu_);
     std::error_code ec;
     fs::remove(file, ec);
-    for (int64_t t = task; t < task + count; ++t) {
+    for (const int64_t t : tasks) {
         store_.discardResult(j.record.id(), t);
         j.tasks[static_cast<size_t>(t)].state = TaskRuntime::State::Pending;
         j.retry.insert(t);
@@ -355,7 +362,9 @@ void Master::mergeOutput(JobRuntime &j, const v1::TaskSpec &work, TaskOutput out
 
 void Master::checkpoint(JobRuntime &j) {
     JobFilm &f = j.film;
-    if (f.merged == f.checkpointed) return;
+    // A film that holds tasks after `merged` waits for the task between (JobFilm::mergedAhead): a checkpoint
+    // records tasks [0, merged) only, and a restart would merge the others a second time.
+    if (f.merged == f.checkpointed || !f.mergedAhead.empty()) return;
     const auto start = Clock::now();
     const fs::path file = fs::path(jobDir(j.record.id())) / ("checkpoint-" + std::to_string(f.merged) + ".blk");
     writeFilmFile(file.string(), f.chain ? chainCheckpoint(*f.chain->job) : farm::encodeBlock(*f.block), true);

@@ -78,7 +78,10 @@ struct Master::JobFilm {
     std::optional<ImageBlock> block;
     std::unique_ptr<ChainState> chain;
     bool open() const { return block || chain; }
-    int64_t merged = 0;         // tasks [0, merged) are in `block`
+    int64_t merged = 0;  // tasks [0, merged) are in `block`
+    // Tasks after `merged` that are in `block` too: the rest of a chain batch whose row passed a direct task not
+    // yet merged. Checkpoints wait until it is empty, since a checkpoint holds tasks [0, merged) only.
+    std::set<int64_t> mergedAhead;
     int64_t checkpointed = 0;   // tasks [0, checkpointed) are in the checkpoint file
     int64_t spp = 0;            // image jobs: samples per pixel merged, in whole tasks
     int64_t partialPixels = 0;  // image jobs: the pixels of a merged partial last task (render/image_task.h)
@@ -91,8 +94,9 @@ struct Master::JobFilm {
         // (with many workers most results arrive out of order). Without it the file is read.
         std::optional<TaskOutput> output;
         size_t bytes = 0;
-        // A batched result holds tasks [index, index + tasks), and `work` their samples together.
-        int64_t tasks = 1;
+        // The tasks of the result, its key first (Master::batchRow); a batched image result's `work` holds their
+        // samples together.
+        std::vector<int64_t> tasks;
         // Its time from the lease to its acceptance beyond the worker's rendering and scene load: the transfer
         // both ways, the worker's encoding, the master's decoding. Negative where the lease time is unknown.
         double transferSeconds = -1;

@@ -286,8 +286,8 @@ void Store::ignoreAttempt(int64_t attempt, int64_t nowMs) {
         .run();
 }
 
-void Store::acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &attempts, const std::string &file,
-                         uint64_t bytes, const TaskStats &stats, int64_t nowMs) {
+void Store::acceptResult(int64_t job, const std::vector<int64_t> &tasks, const std::vector<int64_t> &attempts,
+                         const std::string &file, uint64_t bytes, const TaskStats &stats, int64_t nowMs) {
     const std::lock_guard<std::mutex> lock(mu_);
     Transaction tx(db_);
     Stmt attempt(db_, "UPDATE attempts SET state = ?, finished_ms = ? WHERE id = ?");
@@ -296,7 +296,7 @@ void Store::acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &
                 "INSERT INTO results (job_id, task_idx, attempt_id, file, bytes, stats, accepted_ms) VALUES (?, ?, ?, "
                 "?, ?, ?, ?)");
     for (size_t i = 0; i < attempts.size(); ++i) {
-        const int64_t t = task + static_cast<int64_t>(i);
+        const int64_t t = tasks.at(i);
         attempt.bind(attempt_state::kCompleted, nowMs, attempts[i]).run();
         accept.bind(task_state::kAccepted, job, t).run();
         insert.bind(job, t, attempts[i], file, i == 0 ? bytes : 0, serialize(i == 0 ? stats : TaskStats()), nowMs)

@@ -82,11 +82,11 @@ public:
     void cancelAttempts(int64_t job, int64_t nowMs);
     // Records that a late result of a superseded attempt was refused.
     void ignoreAttempt(int64_t attempt, int64_t nowMs);
-    // The result of `attempts` (of tasks task, task + 1, ...: a batch holds several) is stored in `file`:
-    // attempts completed, tasks accepted, results recorded, in one transaction. The batch's later tasks
-    // are recorded with the same file, no bytes and empty stats, so that sums over results stay right.
-    void acceptResult(int64_t job, int64_t task, const std::vector<int64_t> &attempts, const std::string &file,
-                      uint64_t bytes, const TaskStats &stats, int64_t nowMs);
+    // The result of `attempts` (of `tasks`, one each: a batch holds several) is stored in `file`: attempts
+    // completed, tasks accepted, results recorded, in one transaction. The batch's later tasks are recorded
+    // with the same file, no bytes and empty stats, so that sums over results stay right.
+    void acceptResult(int64_t job, const std::vector<int64_t> &tasks, const std::vector<int64_t> &attempts,
+                      const std::string &file, uint64_t bytes, const TaskStats &stats, int64_t nowMs);
     // The film checkpoint `file` contains tasks [0, mergedTasks): tasks [fromTask, mergedTasks) are
     // recorded as merged, and the job's record saved, in one transaction.
     void commitCheckpoint(const Job &job, int64_t fromTask, int64_t mergedTasks, const std::string &file,

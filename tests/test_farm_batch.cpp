@@ -4,11 +4,12 @@
 // render up to the rounding of the batch's own sum (it is added to the film as one block, not task by task), every task
 // is merged exactly once (also under a time budget), a batch that is out of order, repeats an attempt, names another
 // worker's attempt or comes again is refused whole, and a worker that goes silent holding a batch, or a master restart
-// with a batch waiting for its turn, loses no work.
+// with a batch waiting for its turn, loses no work. A chain batch passes over the direct tasks between its chain tasks.
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <cmath>
+#include <thread>
 
 #include "batch_governor.h"
 #include "farm/block_codec.h"
@@ -130,6 +131,17 @@ void submitOnNewMaster(Farm &farm, const std::string &spec, std::string &scene, 
     farm.startMaster();
     scene = writeTestScene(farm.dir() + "/scene", 32, 8);
     const auto [code, output] = farm.cli("submit " + scene + " " + spec + " --seed 4 -P maxDepth=4");
+    ASSERT_EQ(code, 0) << output;
+    id = jobIdFrom(output);
+}
+
+// On a started master: writes the 32² test scene, renders `spec` (with seed 4 and maxDepth 4) embedded into `ref`
+// and submits it as job `id`.
+void submitBesideEmbedded(Farm &farm, const std::string &spec, std::string &scene, std::string &ref, int64_t &id) {
+    scene = writeTestScene(farm.dir() + "/scene", 32, 8);
+    const std::string args = spec + " --seed 4 -P maxDepth=4";
+    ref = farm.embeddedRender(scene, args, "ref");
+    const auto [code, output] = farm.cli("submit " + scene + " " + args);
     ASSERT_EQ(code, 0) << output;
     id = jobIdFrom(output);
 }
@@ -486,6 +498,79 @@ TEST_F(FarmTest, AChainBatchHoldsUpToItsWorkersShareOfTheTasksLeft) {
     EXPECT_GT(batches, 5);
 }
 
+// A chain batch's row passes over the direct tasks between its chain tasks (render/chain_job.h interleaves them by
+// pass): the next request takes them. Its result then merges ahead of a direct task not yet merged, and no checkpoint
+// may record that film (a checkpoint holds tasks [0, merged) only). Two master restarts: one with the batch waiting
+// for its turn (its stored rows, split by the direct task's, join again), one with it merged ahead of the direct task.
+// Every task is merged once and the image equals the embedded render up to rounding.
+TEST_F(FarmTest, AChainBatchPassesOverTheDirectTasksBetweenItsChainTasks) {
+    // Checkpoints are due every 300 ms; leases outlast the test's steps after each restart.
+    const std::vector<std::string> flags = {"--lease-ms", "8000", "--heartbeat-ms", "250", "--checkpoint-ms", "300"};
+    farm->startMaster(flags);
+    std::string scene, ref;
+    int64_t id = -1;
+    ASSERT_NO_FATAL_FAILURE(submitBesideEmbedded(
+        *farm,
+        "--integrator erpt --spp 1 -P luminanceSamples=2000 -P directSamples=4 -P chainLength=20 -P passMutations=100",
+        scene, ref, id));
+    FakeWorker batcher(*farm), other(*farm);
+    std::optional<ChainPayloads> payloads;
+    // The seeding and the first direct tasks, one by one, up to the first chain task (kept leased).
+    std::vector<v1::TaskSpec> head;
+    for (;;) {
+        head = batcher.leaseBatch(1);
+        ASSERT_EQ(head.size(), 1u);
+        if (!payloads) payloads.emplace(scene, head[0]);
+        if (head[0].has_chain()) break;
+        ASSERT_TRUE(batcher.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
+    }
+    const std::vector<v1::TaskSpec> batch = batcher.leaseBatch(master::Master::kMaxChainBatchTasks);
+    ASSERT_GT(batch.size(), 1u);
+    std::vector<int64_t> passed;  // the direct tasks between the batch's chain tasks
+    int64_t last = head[0].task_index();
+    for (const v1::TaskSpec &t : batch) {
+        ASSERT_TRUE(t.has_chain());
+        ASSERT_GT(t.task_index(), last);
+        for (int64_t i = last + 1; i < t.task_index(); ++i) passed.push_back(i);
+        last = t.task_index();
+    }
+    ASSERT_FALSE(passed.empty()) << "no direct task between " << batch.front().task_index() << " and " << last;
+    // The next request takes them, one at a time (a direct task is never batched).
+    std::vector<std::vector<v1::TaskSpec>> direct;
+    for (const int64_t index : passed) {
+        direct.push_back(other.leaseBatch(master::Master::kMaxChainBatchTasks));
+        ASSERT_EQ(direct.back().size(), 1u);
+        EXPECT_EQ(direct.back()[0].task_index(), index);
+        EXPECT_TRUE(direct.back()[0].has_image() && direct.back()[0].image().direct());
+    }
+    // The batch arrives before the task ahead of it, and waits on disk through a restart.
+    ASSERT_TRUE(
+        batcher.complete(batch[0].attempt_id(), payloads->payload(batch), grpc::StatusCode::OK, laterAttempts(batch))
+            .accepted());
+    farm->killMaster();
+    farm->startMaster(flags);
+    // Now it merges, ahead of the direct tasks, once a checkpoint is due; then a second restart.
+    std::this_thread::sleep_for(400ms);
+    ASSERT_TRUE(batcher.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
+    std::this_thread::sleep_for(400ms);
+    farm->killMaster();
+    farm->startMaster(flags);
+    for (const std::vector<v1::TaskSpec> &d : direct)
+        ASSERT_TRUE(other.complete(d[0].attempt_id(), payloads->payload(d)).accepted());
+    for (std::vector<v1::TaskSpec> rest = other.leaseBatch(master::Master::kMaxChainBatchTasks); !rest.empty();
+         rest = other.leaseBatch(master::Master::kMaxChainBatchTasks))
+        ASSERT_TRUE(
+            other.complete(rest[0].attempt_id(), payloads->payload(rest), grpc::StatusCode::OK, laterAttempts(rest))
+                .accepted());
+    const v1::Job job = farm->waitForJob(id, 60s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm->master().log();
+    expectMergedOnce(*farm, id, job.tasks().total());
+    const std::string out = farm->dir() + "/farm.exr";
+    const auto [fetched, fetchOutput] = farm->cli("fetch " + std::to_string(id) + " -o " + out);
+    ASSERT_EQ(fetched, 0) << fetchOutput;
+    expectEqualUpToRounding(ref, out);
+}
+
 // The share counts only the workers that may run the job: a worker that runs other integrators only (or is
 // blocklisted for the job) takes none of its tasks, so it does not halve the others' batches.
 TEST_F(FarmTest, WorkersThatCannotRunAJobDoNotShrinkItsBatches) {
@@ -547,14 +632,11 @@ TEST_F(FarmTest, ADrainingWorkerGivesBackTheUnstartedImageTasksOfItsBatch) {
 // the tasks it names, and the image equals the embedded render up to the batch's rounding.
 TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
     farm->startMaster(kFastLeases);
-    const std::string scene = writeTestScene(farm->dir() + "/scene", 32, 8);
+    std::string scene, ref;
+    int64_t id = -1;
     // Enough chain tasks that the batcher's share of those not yet issued (with `first` live) holds three.
-    const std::string spec =
-        "--integrator mlt --spp 256 --seed 4 -P maxDepth=4 -P luminanceSamples=5000 -P directSamples=0";
-    const std::string ref = farm->embeddedRender(scene, spec, "ref");
-    const auto [code, output] = farm->cli("submit " + scene + " " + spec);
-    ASSERT_EQ(code, 0) << output;
-    const int64_t id = jobIdFrom(output);
+    ASSERT_NO_FATAL_FAILURE(submitBesideEmbedded(
+        *farm, "--integrator mlt --spp 256 -P luminanceSamples=5000 -P directSamples=0", scene, ref, id));
     FakeWorker first(*farm), batcher(*farm);
     std::optional<ChainPayloads> payloads;
     // The seeding, then the first chain task (no direct component), which `first` keeps.

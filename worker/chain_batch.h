@@ -1,8 +1,9 @@
 // A batch of chain tasks on a worker (issue 17): the master leases a run of chain tasks that follow each other
-// in a job, the worker's threads run them one per thread as usual, and their results are added up in task
-// order and leave as one result naming every attempt, which the master decodes and merges once. A chain task's
-// film covers most of a 1024² image (erpt's tasks: 70-87% of its 8² tiles), so a batch's sum is barely larger
-// than one task's: the bytes on the wire and the master's decoding per task fall about as 1 / (tasks).
+// in a job (past the direct tasks between them, which it leases apart: Master::batchRow), the worker's threads run
+// them one per thread as usual, and their results are added up in task order and leave as one result naming every
+// attempt, which the master decodes and merges once. A chain task's film covers most of a 1024² image (erpt's
+// tasks: 70-87% of its 8² tiles), so a batch's sum is barely larger than one task's: the bytes on the wire and the
+// master's decoding per task fall about as 1 / (tasks).
 // A task that fails or whose lease is lost ends the run before it; the tasks after it start a new run.
 // Results that end ahead of their turn wait for it, each with a film of most of the image. So that a slow task
 // cannot make them pile up (a batch may hold 1024 tasks), a task that holds up more than `maxWaiting` of them is

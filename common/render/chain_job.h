@@ -84,7 +84,8 @@ public:
     // The last seeding result builds the normalizer.
     void mergeSeeding(SeedingResult result);
     void mergeDirect(const ImageBlock &block, int64_t samplesPerPixel);
-    // A farm worker's batch comes as the sum of `tasks` chain tasks that follow each other.
+    // A farm worker's batch comes as the sum of `tasks` chain tasks that follow each other (the direct tasks
+    // between them apart, which merge into the other component).
     void mergeChain(const ChainResult &result, uint64_t tasks = 1) { mergeChainResult(chains_, result, tasks); }
     // Puts back the merged direct component and chains of a checkpoint (after the seeding is merged again).
     void restore(ImageBlock direct, int64_t directSamplesPerPixel, ChainImage chains);
