@@ -152,6 +152,27 @@ std::vector<int64_t> laterAttempts(const std::vector<v1::TaskSpec> &tasks) {
     return out;
 }
 
+// Job `id` ends done, every task merged once, and its image equals `ref` up to rounding. `job`: the finished job.
+void expectDoneAsEmbedded(Farm &farm, int64_t id, const std::string &ref, v1::Job &job) {
+    job = farm.waitForJob(id, 60s);
+    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm.master().log();
+    expectMergedOnce(farm, id, job.tasks().total());
+    const std::string out = farm.dir() + "/farm.exr";
+    const auto [fetched, log] = farm.cli("fetch " + std::to_string(id) + " -o " + out);
+    ASSERT_EQ(fetched, 0) << log;
+    expectEqualUpToRounding(ref, out);
+}
+
+// Leases job `id`'s tasks left through `w`, `batch` at a time, delivers them, and expects the job done as the
+// embedded render `ref` (expectDoneAsEmbedded).
+void finishChainJob(Farm &farm, FakeWorker &w, const ChainPayloads &payloads, int64_t id, int batch,
+                    const std::string &ref, v1::Job &job) {
+    for (std::vector<v1::TaskSpec> rest = w.leaseBatch(batch); !rest.empty(); rest = w.leaseBatch(batch))
+        ASSERT_TRUE(w.complete(rest[0].attempt_id(), payloads.payload(rest), grpc::StatusCode::OK, laterAttempts(rest))
+                        .accepted());
+    expectDoneAsEmbedded(farm, id, ref, job);
+}
+
 // A job of the test scene, its embedded render, and the fetched farm image.
 struct Job {
     Job(const Farm &farm, int res)
@@ -557,18 +578,8 @@ TEST_F(FarmTest, AChainBatchPassesOverTheDirectTasksBetweenItsChainTasks) {
     farm->startMaster(flags);
     for (const std::vector<v1::TaskSpec> &d : direct)
         ASSERT_TRUE(other.complete(d[0].attempt_id(), payloads->payload(d)).accepted());
-    for (std::vector<v1::TaskSpec> rest = other.leaseBatch(master::Master::kMaxChainBatchTasks); !rest.empty();
-         rest = other.leaseBatch(master::Master::kMaxChainBatchTasks))
-        ASSERT_TRUE(
-            other.complete(rest[0].attempt_id(), payloads->payload(rest), grpc::StatusCode::OK, laterAttempts(rest))
-                .accepted());
-    const v1::Job job = farm->waitForJob(id, 60s);
-    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm->master().log();
-    expectMergedOnce(*farm, id, job.tasks().total());
-    const std::string out = farm->dir() + "/farm.exr";
-    const auto [fetched, fetchOutput] = farm->cli("fetch " + std::to_string(id) + " -o " + out);
-    ASSERT_EQ(fetched, 0) << fetchOutput;
-    expectEqualUpToRounding(ref, out);
+    v1::Job job;
+    ASSERT_NO_FATAL_FAILURE(finishChainJob(*farm, other, *payloads, id, master::Master::kMaxChainBatchTasks, ref, job));
 }
 
 // The share counts only the workers that may run the job: a worker that runs other integrators only (or is
@@ -607,13 +618,8 @@ void expectDrainGivesBackTheRestOfABatch(Farm &farm, int res, const std::string 
         << worker.log();
     EXPECT_GE(farm.queryStore("SELECT COUNT(*) FROM attempts WHERE state = 'completed'" + ofJob), 1) << worker.log();
     farm.startWorker(2);
-    const v1::Job job = farm.waitForJob(id, 60s);
-    ASSERT_EQ(job.state(), v1::JOB_DONE) << farm.master().log();
-    expectMergedOnce(farm, id, job.tasks().total());
-    const std::string out = farm.dir() + "/farm.exr";
-    const auto [fetched, log] = farm.cli("fetch " + std::to_string(id) + " -o " + out);
-    ASSERT_EQ(fetched, 0) << log;
-    expectEqualUpToRounding(ref, out);
+    v1::Job job;
+    expectDoneAsEmbedded(farm, id, ref, job);
 }
 
 TEST_F(FarmTest, ADrainingWorkerGivesBackTheUnstartedChainTasksOfItsBatch) {
@@ -655,20 +661,11 @@ TEST_F(FarmTest, AChainBatchWaitingForItsTurnSurvivesAMasterRestart) {
     farm->killMaster();
     farm->startMaster(kFastLeases);
     EXPECT_TRUE(first.complete(head[0].attempt_id(), payloads->payload(head)).accepted());
-    for (std::vector<v1::TaskSpec> rest = first.leaseBatch(2); !rest.empty(); rest = first.leaseBatch(2))
-        EXPECT_TRUE(
-            first.complete(rest[0].attempt_id(), payloads->payload(rest), grpc::StatusCode::OK, laterAttempts(rest))
-                .accepted());
-    const v1::Job job = farm->waitForJob(id, 60s);
-    ASSERT_EQ(job.state(), v1::JOB_DONE);
-    expectMergedOnce(*farm, id, job.tasks().total());
+    v1::Job job;
+    ASSERT_NO_FATAL_FAILURE(finishChainJob(*farm, first, *payloads, id, 2, ref, job));
     // The batch was merged from its file, not lost and rendered again: one attempt per task.
     EXPECT_EQ(farm->queryStore("SELECT COUNT(*) FROM attempts WHERE job_id = " + std::to_string(id)),
               job.tasks().total());
-    const std::string out = farm->dir() + "/farm.exr";
-    const auto [fetched, log] = farm->cli("fetch " + std::to_string(id) + " -o " + out);
-    ASSERT_EQ(fetched, 0) << log;
-    expectEqualUpToRounding(ref, out);
 }
 
 // A chain job batches its chain tasks only: a result that names a direct-component task and the chain task after
