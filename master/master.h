@@ -212,6 +212,8 @@ private:
     // job's are its chain tasks from `first` on, past the direct tasks between them (lease leaves those to the
     // next request, so that they do not cut a worker's row of chain tasks). Shorter where the issued tasks end.
     static std::vector<int64_t> batchRow(const JobRuntime &j, int64_t first, size_t count);
+    // Whether a batch's row passes over task `index` of j (a chain job's direct task) rather than holding it.
+    static bool passedInRow(const JobRuntime &j, int64_t index);
     // Whether worker w may take j's tasks: it runs j's integrator (its `algorithms`, if it lists any) and is not
     // blocklisted for j.
     static bool mayRun(const JobRuntime &j, const WorkerRuntime &w);

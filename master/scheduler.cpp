@@ -94,7 +94,7 @@ std::vector<v1::TaskSpec> Master::lease(const std::string &worker, std::chrono::
                  ++want) {
                 const std::optional<int64_t> next = nextTaskFor(j, w);
                 if (!next) break;
-                if (*next == want && j.chain && j.tasks[static_cast<size_t>(want)].work.has_image()) {
+                if (*next == want && passedInRow(j, want)) {
                     passed.push_back(want);
                     continue;
                 }
@@ -232,8 +232,12 @@ std::vector<int64_t> Master::batchRow(const JobRuntime &j, int64_t first, size_t
     std::vector<int64_t> row{first};
     const auto issued = static_cast<int64_t>(j.tasks.size());
     for (int64_t t = first + 1; row.size() < count && t < issued; ++t)
-        if (!j.chain || j.tasks[static_cast<size_t>(t)].work.has_chain()) row.push_back(t);
+        if (!passedInRow(j, t)) row.push_back(t);
     return row;
+}
+
+bool Master::passedInRow(const JobRuntime &j, int64_t index) {
+    return j.chain && j.tasks[static_cast<size_t>(index)].work.has_image();
 }
 
 bool Master::mayRun(const JobRuntime &j, const WorkerRuntime &w) {
